@@ -1,0 +1,77 @@
+//! Static analysis: the loads are scaled by a factor `lambda` that rises
+//! linearly from 0 to 1 over the steps (ramps of individual loads are
+//! ignored), and each step solves `F_int(Y) = lambda F_ext(Y)` by Newton.
+//!
+//! When it applies: the static Hessian `K` of a membrane is singular
+//! wherever the membrane carries no tension (an unstressed flat membrane
+//! has no stiffness across its plane). Static analysis therefore needs a
+//! configuration that is tensioned from the first step on: a `prestress`,
+//! or supports that stretch it. A slack membrane (a fabric hanging or
+//! draping, a flat membrane under the first increment of pressure) needs a
+//! dynamic analysis, which the mass term regularises; run it to rest with
+//! `beta = 1, gamma = 1.5` for a static solution.
+
+use super::{State, StepSystem};
+use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
+use crate::model::Model;
+use crate::solver::newton::{self, NewtonError, NewtonSettings};
+
+/// Load stepping over `steps` equal increments of the load factor.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StaticStepper {
+    /// Number of load increments.
+    pub steps: usize,
+}
+
+impl StaticStepper {
+    /// Advances the load factor `state.time` by `dlambda` and solves for
+    /// equilibrium. Velocities and accelerations stay zero. On error `state`
+    /// is unchanged.
+    pub fn step(
+        &self,
+        model: &Model,
+        state: &mut State,
+        dlambda: f64,
+        settings: &NewtonSettings,
+        length: f64,
+        ws: &mut DynamicWorkspace,
+    ) -> Result<StepOutcome, NewtonError> {
+        let lambda = (state.time + dlambda).min(1.0 + 1e-12);
+        let mut dead = vec![0.0; model.dofs()];
+        model.dead_forces(lambda, Some(lambda), &mut dead);
+        let old_ext = ws.f_ext.clone();
+        let mut y = state.positions.clone();
+        let mut my = Vec::new();
+        let mut system = StepSystem {
+            model,
+            c: 0.0,
+            mq: &[],
+            dead: &dead,
+            pressure: model.pressure_at(lambda, Some(lambda)),
+            f_int: &mut ws.f_int,
+            f_ext: &mut ws.f_ext,
+            my: &mut my,
+            strain_energy: 0.0,
+        };
+        let result = newton::solve(&mut system, &mut y, length, settings, &mut ws.newton);
+        let strain_energy = system.strain_energy;
+        let report = match result {
+            Ok(r) => r,
+            Err(e) => {
+                ws.f_ext.copy_from_slice(&old_ext);
+                return Err(e);
+            }
+        };
+        let mut work = 0.0;
+        for i in 0..y.len() {
+            work += 0.5 * (old_ext[i] + ws.f_ext[i]) * (y[i] - state.positions[i]);
+        }
+        state.positions = y;
+        state.time = lambda;
+        state.external_work += work;
+        Ok(StepOutcome {
+            newton: report,
+            strain_energy,
+        })
+    }
+}

@@ -1,0 +1,26 @@
+//! # drape
+//!
+//! Membranes and fabrics in large displacement with the positional finite
+//! element method: the unknowns are the nodal positions, every measure is
+//! total Lagrangian. Triangular membrane elements of order 1–3,
+//! Saint-Venant–Kirchhoff in plane stress, implicit Newmark-beta dynamics
+//! solved by Newton–Raphson on a sparse Hessian.
+//!
+//! Data flows one way: [`scenario`] (a TOML file) → [`model::Model`] →
+//! [`integrator`] (one time step) → [`solver`] (Newton, sparse direct
+//! solves) → [`output`] (history, fields, summary); [`simulation`] drives
+//! the loop. See `ARCHITECTURE.md` for the map.
+#![warn(missing_docs)]
+
+pub mod element;
+pub mod fd;
+pub mod integrator;
+pub mod load;
+pub mod material;
+pub mod mesh;
+pub mod model;
+// pub mod output;
+// pub mod scenario;
+// pub mod simulation;
+pub mod solver;
+pub mod vec3;

@@ -1,0 +1,46 @@
+//! Constitutive models of the membrane (plane stress).
+//!
+//! Convention (Voigt, engineering shear), used everywhere in drape:
+//! strain `e = [E11, E22, 2 E12]` (Green–Lagrange, in the element's local
+//! frame), stress `s = [S11, S22, S12]` (second Piola–Kirchhoff, Pa), so
+//! that the energy increment is `dW = s . de`. A material gives the strain
+//! energy per unit initial volume `W(e)` (J/m^3), the stress `s = dW/de`
+//! and the tangent `D = ds/de` (3x3, Pa).
+
+mod svk;
+
+pub use svk::SaintVenantKirchhoff;
+
+/// The energy, stress and tangent at one strain.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MaterialResponse {
+    /// Strain energy per unit initial volume `W` (J/m^3).
+    pub energy: f64,
+    /// `s = [S11, S22, S12]` (Pa).
+    pub stress: [f64; 3],
+    /// `D[r][c] = d s_r / d e_c` (Pa); not symmetric for every model.
+    pub tangent: [[f64; 3]; 3],
+}
+
+/// A plane-stress constitutive model in the Voigt convention above.
+pub trait Material: Send + Sync + std::fmt::Debug {
+    /// Strain energy per unit initial volume `W(e)` (J/m^3).
+    fn energy(&self, strain: [f64; 3]) -> f64;
+    /// Second Piola–Kirchhoff stress `s = dW/de` (Pa).
+    fn stress(&self, strain: [f64; 3]) -> [f64; 3];
+    /// Tangent `D = ds/de` (Pa).
+    fn tangent(&self, strain: [f64; 3]) -> [[f64; 3]; 3];
+    /// All three at once (override when sharing work pays).
+    fn evaluate(&self, strain: [f64; 3]) -> MaterialResponse {
+        MaterialResponse {
+            energy: self.energy(strain),
+            stress: self.stress(strain),
+            tangent: self.tangent(strain),
+        }
+    }
+    /// Whether [`Material::tangent`] is always symmetric (then the Hessian
+    /// is symmetric and Cholesky applies).
+    fn has_symmetric_tangent(&self) -> bool {
+        true
+    }
+}

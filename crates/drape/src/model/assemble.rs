@@ -1,0 +1,198 @@
+//! Parallel assembly of the internal and pressure forces and the Hessian.
+//!
+//! Elements are processed colour by colour (no two elements of a colour
+//! share a node), each colour in parallel with rayon; an element writes
+//! only the force entries of its own nodes and the Hessian entries of its
+//! own node pairs, so the writes of one colour never overlap.
+
+use super::Model;
+use crate::element::lagrange::MAX_NODES;
+use crate::element::membrane::{element_force_hessian, element_stress, principal_values};
+use crate::load::pressure::add_pressure_force;
+use rayon::prelude::*;
+
+/// A raw pointer shared by the threads of one colour; sound because the
+/// elements of a colour touch disjoint entries (see the module docs).
+#[derive(Clone, Copy)]
+struct Shared(*mut f64);
+unsafe impl Send for Shared {}
+unsafe impl Sync for Shared {}
+
+impl Shared {
+    /// # Safety
+    /// `k` is in bounds and no other thread writes entry `k` concurrently.
+    #[inline]
+    unsafe fn add(self, k: usize, v: f64) {
+        unsafe { *self.0.add(k) += v }
+    }
+}
+
+/// Per-thread scratch for one element.
+struct Local {
+    y: [[f64; 3]; MAX_NODES],
+    f: [f64; 3 * MAX_NODES],
+    fp: [f64; 3 * MAX_NODES],
+    k: Vec<f64>,
+}
+
+impl Local {
+    fn new() -> Self {
+        Self {
+            y: [[0.0; 3]; MAX_NODES],
+            f: [0.0; 3 * MAX_NODES],
+            fp: [0.0; 3 * MAX_NODES],
+            k: vec![0.0; 9 * MAX_NODES * MAX_NODES],
+        }
+    }
+}
+
+/// Per-element results for output.
+#[derive(Debug, Clone, Default)]
+pub struct ElementResults {
+    /// Mean second Piola–Kirchhoff stress `[S11, S22, S12]` (Pa) in the element's local frame.
+    pub stress: Vec<[f64; 3]>,
+    /// Principal values `[s1, s2]`, `s1 >= s2` (Pa).
+    pub principal: Vec<[f64; 2]>,
+}
+
+impl Model {
+    /// Strain energy (returned), internal forces `f_int` (overwritten),
+    /// pressure forces added to `f_ext` for the pressure `pressure` (Pa),
+    /// and, if given, the Hessian values `h` (overwritten) `K - d f_p / d Y`
+    /// on [`Model::pattern`]. `y`: current positions, flattened.
+    pub fn assemble(
+        &self,
+        y: &[f64],
+        pressure: f64,
+        f_int: &mut [f64],
+        f_ext: &mut [f64],
+        h: Option<&mut [f64]>,
+    ) -> f64 {
+        let n = self.mesh.order.nodes_per_element();
+        let m = 3 * n;
+        f_int.fill(0.0);
+        let want_h = h.is_some();
+        let h_ptr = match h {
+            Some(h) => {
+                h.fill(0.0);
+                Shared(h.as_mut_ptr())
+            }
+            None => Shared(std::ptr::null_mut()),
+        };
+        let fi = Shared(f_int.as_mut_ptr());
+        let fe = Shared(f_ext.as_mut_ptr());
+        let material = self.material.as_ref();
+        let mut energy = 0.0;
+        for colour in &self.colours {
+            energy += colour
+                .par_iter()
+                .map_init(Local::new, |local, &e| {
+                    let el = self.mesh.element(e);
+                    for (a, &node) in el.iter().enumerate() {
+                        local.y[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
+                    }
+                    let (grad, weight) = self.geometry.element(e);
+                    let k = want_h.then_some(&mut local.k[..m * m]);
+                    let u = element_force_hessian(
+                        material,
+                        self.section,
+                        &local.y[..n],
+                        grad,
+                        weight,
+                        &mut local.f[..m],
+                        k,
+                    );
+                    if pressure != 0.0 {
+                        local.fp[..m].fill(0.0);
+                        let k = want_h.then_some(&mut local.k[..m * m]);
+                        add_pressure_force(
+                            pressure,
+                            &local.y[..n],
+                            &self.pressure_quadrature,
+                            &mut local.fp[..m],
+                            k,
+                            -1.0,
+                        );
+                    }
+                    // SAFETY: the elements of one colour share no node, so
+                    // the entries written below are disjoint across threads.
+                    unsafe {
+                        for (a, &node) in el.iter().enumerate() {
+                            for i in 0..3 {
+                                fi.add(3 * node + i, local.f[3 * a + i]);
+                                if pressure != 0.0 {
+                                    fe.add(3 * node + i, local.fp[3 * a + i]);
+                                }
+                            }
+                        }
+                        if want_h {
+                            let blocks = &self.element_blocks[e * n * n..(e + 1) * n * n];
+                            for a in 0..n {
+                                for (b, &node_b) in el.iter().enumerate() {
+                                    let p = blocks[a * n + b];
+                                    for i in 0..3 {
+                                        let row = (3 * a + i) * m + 3 * b;
+                                        for j in 0..3 {
+                                            h_ptr.add(
+                                                self.pattern.entry(p, node_b, i, j),
+                                                local.k[row + j],
+                                            );
+                                        }
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    u
+                })
+                .sum::<f64>();
+        }
+        energy
+    }
+
+    /// Strain energy only (J).
+    pub fn strain_energy(&self, y: &[f64]) -> f64 {
+        let n = self.mesh.order.nodes_per_element();
+        (0..self.mesh.element_count())
+            .into_par_iter()
+            .map(|e| {
+                let mut ye = [[0.0; 3]; MAX_NODES];
+                for (a, &node) in self.mesh.element(e).iter().enumerate() {
+                    ye[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
+                }
+                let (grad, weight) = self.geometry.element(e);
+                crate::element::membrane::element_energy(
+                    self.material.as_ref(),
+                    self.section,
+                    &ye[..n],
+                    grad,
+                    weight,
+                )
+            })
+            .sum()
+    }
+
+    /// Mean stress and principal stresses of every element at positions `y`.
+    pub fn element_results(&self, y: &[f64]) -> ElementResults {
+        let n = self.mesh.order.nodes_per_element();
+        let stress: Vec<[f64; 3]> = (0..self.mesh.element_count())
+            .into_par_iter()
+            .map(|e| {
+                let mut ye = [[0.0; 3]; MAX_NODES];
+                for (a, &node) in self.mesh.element(e).iter().enumerate() {
+                    ye[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
+                }
+                let (grad, weight) = self.geometry.element(e);
+                element_stress(self.material.as_ref(), self.section, &ye[..n], grad, weight)
+            })
+            .collect();
+        let principal = stress
+            .iter()
+            .map(|s| {
+                let (s1, s2) = principal_values(*s);
+                [s1, s2]
+            })
+            .collect();
+        ElementResults { stress, principal }
+    }
+}

@@ -1,0 +1,252 @@
+//! The discrete model: mesh, element geometry, material, mass, loads and
+//! supports, with the parallel assembly of forces and the Hessian.
+//!
+//! Degrees of freedom are the nodal positions, `3a + i` for component `i`
+//! of node `a`. Fixed components are eliminated: their rows and columns of
+//! the Hessian are replaced by the identity and their residual by zero, so
+//! their increment is exactly zero (no penalty).
+
+mod assemble;
+
+pub use assemble::ElementResults;
+mod mass;
+
+pub use mass::MassKind;
+
+use crate::element::ElementGeometry;
+use crate::element::membrane::Section;
+use crate::element::quadrature::QuadratureRule;
+use crate::load::pressure::PressureQuadrature;
+use crate::load::{Load, LoadKind};
+use crate::material::Material;
+use crate::mesh::Mesh;
+use crate::solver::SparsePattern;
+use crate::solver::pattern::colour_elements;
+
+/// Everything that defines the discrete problem, independent of time.
+#[derive(Debug)]
+pub struct Model {
+    /// The reference mesh.
+    pub mesh: Mesh,
+    /// Element geometry at the stiffness quadrature points.
+    pub geometry: ElementGeometry,
+    /// Constitutive model.
+    pub material: Box<dyn Material>,
+    /// Thickness and prestress.
+    pub section: Section,
+    /// Mass density `rho` (kg/m^3).
+    pub density: f64,
+    /// External loads.
+    pub loads: Vec<Load>,
+    /// `fixed[3a + i]`: component `i` of node `a` is held at its initial value.
+    pub fixed: Vec<bool>,
+    /// How the mass matrix is built.
+    pub mass_kind: MassKind,
+    /// Sparsity pattern of the Hessian.
+    pub pattern: SparsePattern,
+    /// Node-graph positions of the element blocks (see [`SparsePattern::element_blocks`]).
+    element_blocks: Vec<usize>,
+    /// Element lists that share no node (parallel assembly).
+    colours: Vec<Vec<usize>>,
+    /// Mass matrix on the node graph, `M^ab = m[p_ab] I3` (kg).
+    mass: Vec<f64>,
+    /// `integral phi^a dA0` per node (m^2): consistent dead surface loads.
+    area_weights: Vec<f64>,
+    /// Pressure quadrature (shared by all elements).
+    pressure_quadrature: PressureQuadrature,
+}
+
+/// Why a model cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ModelError {
+    /// The mesh is unusable.
+    #[error(transparent)]
+    Mesh(#[from] crate::mesh::MeshError),
+    /// A lumped mass came out non-positive at a node.
+    #[error("the lumped mass of node {node} is {mass:e} kg (not positive)")]
+    NonPositiveMass {
+        /// Node index.
+        node: usize,
+        /// Its lumped mass.
+        mass: f64,
+    },
+}
+
+impl Model {
+    /// Builds the model; the mesh is validated first.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        mesh: Mesh,
+        material: Box<dyn Material>,
+        section: Section,
+        density: f64,
+        loads: Vec<Load>,
+        fixed: Vec<bool>,
+        mass_kind: MassKind,
+    ) -> Result<Self, ModelError> {
+        mesh.validate()?;
+        let p = mesh.order.degree();
+        let geometry = ElementGeometry::new(&mesh, &QuadratureRule::of_degree(4 * (p - 1)));
+        let pattern = SparsePattern::new(mesh.node_count(), mesh.elements());
+        let element_blocks = pattern.element_blocks(mesh.elements());
+        let colours = colour_elements(mesh.node_count(), mesh.elements());
+        let mass = mass::assemble_mass(&mesh, &pattern, density * section.thickness, mass_kind)?;
+        let area_weights = mass::area_weights(&mesh);
+        let pressure_quadrature = PressureQuadrature::new(mesh.order);
+        let mut fixed = fixed;
+        fixed.resize(3 * mesh.node_count(), false);
+        Ok(Self {
+            mesh,
+            geometry,
+            material,
+            section,
+            density,
+            loads,
+            fixed,
+            mass_kind,
+            pattern,
+            element_blocks,
+            colours,
+            mass,
+            area_weights,
+            pressure_quadrature,
+        })
+    }
+
+    /// Number of degrees of freedom (3 per node, fixed ones included).
+    pub fn dofs(&self) -> usize {
+        3 * self.mesh.node_count()
+    }
+
+    /// Number of fixed components.
+    pub fn fixed_count(&self) -> usize {
+        self.fixed.iter().filter(|&&f| f).count()
+    }
+
+    /// Initial positions `X`, flattened.
+    pub fn initial_positions(&self) -> Vec<f64> {
+        self.mesh.nodes.iter().flatten().copied().collect()
+    }
+
+    /// Total mass (kg): `sum_ab M^ab`.
+    pub fn total_mass(&self) -> f64 {
+        self.mass.iter().sum()
+    }
+
+    /// Total follower pressure `sum_k p_k r_k(t)` at time `t` (Pa).
+    pub fn pressure_at(&self, t: f64, static_factor: Option<f64>) -> f64 {
+        self.loads
+            .iter()
+            .map(|l| match l.kind {
+                LoadKind::Pressure { value } => value * self.factor(l, t, static_factor),
+                _ => 0.0,
+            })
+            .sum()
+    }
+
+    fn factor(&self, load: &Load, t: f64, static_factor: Option<f64>) -> f64 {
+        static_factor.unwrap_or_else(|| load.factor(t))
+    }
+
+    /// Whether the Hessian is symmetric by construction (no follower
+    /// pressure, symmetric material tangent).
+    pub fn symmetric_by_construction(&self) -> bool {
+        self.material.has_symmetric_tangent()
+            && !self
+                .loads
+                .iter()
+                .any(|l| matches!(l.kind, LoadKind::Pressure { .. }))
+    }
+
+    /// Dead external forces (surface, gravity, nodal) at time `t`, written
+    /// into `f` (`dofs` long). `static_factor`: the load factor of a static
+    /// analysis, replacing the ramps.
+    pub fn dead_forces(&self, t: f64, static_factor: Option<f64>, f: &mut [f64]) {
+        f.fill(0.0);
+        let rho_t = self.density * self.section.thickness;
+        for load in &self.loads {
+            let s = self.factor(load, t, static_factor);
+            match &load.kind {
+                LoadKind::Surface { force } => self.add_surface(f, *force, s),
+                LoadKind::Gravity { acceleration } => {
+                    self.add_surface(f, acceleration.map(|g| rho_t * g), s)
+                }
+                LoadKind::Nodal { nodes, force } => {
+                    for &a in nodes {
+                        for i in 0..3 {
+                            f[3 * a + i] += s * force[i];
+                        }
+                    }
+                }
+                LoadKind::Pressure { .. } => {}
+            }
+        }
+    }
+
+    fn add_surface(&self, f: &mut [f64], q: [f64; 3], s: f64) {
+        for (a, w) in self.area_weights.iter().enumerate() {
+            for i in 0..3 {
+                f[3 * a + i] += s * q[i] * w;
+            }
+        }
+    }
+
+    /// `out = M v` (consistent or lumped mass).
+    pub fn mass_times(&self, v: &[f64], out: &mut [f64]) {
+        let (ptr, rows) = self.pattern.node_graph();
+        use rayon::prelude::*;
+        out.par_chunks_mut(3).enumerate().for_each(|(b, o)| {
+            // M is symmetric: row b of M v = column b of M dotted with v.
+            let mut s = [0.0; 3];
+            for p in ptr[b]..ptr[b + 1] {
+                let a = rows[p];
+                let m = self.mass[p];
+                s[0] += m * v[3 * a];
+                s[1] += m * v[3 * a + 1];
+                s[2] += m * v[3 * a + 2];
+            }
+            o.copy_from_slice(&s);
+        });
+    }
+
+    /// Kinetic energy `1/2 V . M V` (J). `scratch`: `dofs` long.
+    pub fn kinetic_energy(&self, v: &[f64], scratch: &mut [f64]) -> f64 {
+        self.mass_times(v, scratch);
+        0.5 * v
+            .iter()
+            .zip(scratch.iter())
+            .map(|(a, b)| a * b)
+            .sum::<f64>()
+    }
+
+    /// Adds `c M` to Hessian values on the pattern.
+    pub fn add_mass_to_hessian(&self, c: f64, h: &mut [f64]) {
+        let (ptr, rows) = self.pattern.node_graph();
+        for b in 0..self.mesh.node_count() {
+            for p in ptr[b]..ptr[b + 1] {
+                let _ = rows;
+                let m = c * self.mass[p];
+                for i in 0..3 {
+                    h[self.pattern.entry(p, b, i, i)] += m;
+                }
+            }
+        }
+    }
+
+    /// Eliminates the fixed components: zero residual, identity rows and
+    /// columns in the Hessian (if given).
+    pub fn apply_supports(&self, g: &mut [f64], h: Option<&mut [f64]>) {
+        let mut h = h;
+        for (d, _) in self.fixed.iter().enumerate().filter(|(_, f)| **f) {
+            g[d] = 0.0;
+            if let Some(h) = h.as_deref_mut() {
+                for k in self.pattern.col_ptr[d]..self.pattern.col_ptr[d + 1] {
+                    h[k] = 0.0;
+                    h[self.pattern.transpose_of(k)] = 0.0;
+                }
+                h[self.pattern.diagonal_of(d)] = 1.0;
+            }
+        }
+    }
+}

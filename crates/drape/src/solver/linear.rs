@@ -1,0 +1,273 @@
+//! Sparse direct solution of `H dY = -G` with faer, reusing the symbolic
+//! analysis for as long as the sparsity pattern holds.
+//!
+//! * Symmetric Hessians (Saint-Venant–Kirchhoff with dead loads, mass and
+//!   supports; a follower pressure on a membrane whose edge is fixed, once
+//!   the element contributions have cancelled) are factorised by sparse
+//!   Cholesky `H = L L^T` with an AMD fill-reducing ordering. Only the lower
+//!   triangle is read.
+//! * A Hessian that is not symmetric (follower pressure on a free edge, the
+//!   wrinkling tangent) or not positive definite (a membrane in compression
+//!   in statics) is factorised by sparse LU with partial pivoting and a
+//!   COLAMD column ordering.
+//!
+//! Each symbolic analysis is made once, on first use, and kept; numeric
+//! factors are written into storage that is reused from call to call.
+
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{
+    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+};
+use faer::sparse::linalg::lu::{NumericLu, SymbolicLu, factorize_symbolic_lu};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use faer::{Conj, Mat, Par, Side};
+
+/// Which factorisation solved a system.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Factorization {
+    /// Sparse Cholesky `L L^T`.
+    Cholesky,
+    /// Sparse LU with partial pivoting.
+    Lu,
+}
+
+/// A linear solve that could not be done.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LinearSolveError {
+    /// The matrix is singular (LU found no pivot, or the solution is not finite).
+    #[error(
+        "the Hessian is singular ({detail}); a membrane without tension has no stiffness across its plane: add mass (dynamic analysis), prestress or supports"
+    )]
+    Singular {
+        /// What the factorisation reported.
+        detail: String,
+    },
+    /// faer failed for another reason (memory, structure).
+    #[error("the sparse factorisation failed: {0}")]
+    Factorization(String),
+}
+
+/// Sparse direct solver bound to one sparsity pattern.
+pub struct LinearSolver {
+    symbolic: SymbolicSparseColMat<usize>,
+    llt: Option<(SymbolicCholesky<usize>, Vec<f64>)>,
+    lu: Option<(SymbolicLu<usize>, NumericLu<usize, f64>)>,
+    memory: MemBuffer,
+    memory_req: StackReq,
+    rhs: Mat<f64>,
+    par: Par,
+}
+
+impl std::fmt::Debug for LinearSolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LinearSolver")
+            .field("dimension", &self.symbolic.nrows())
+            .field("nnz", &self.symbolic.compute_nnz())
+            .field("cholesky", &self.llt.is_some())
+            .field("lu", &self.lu.is_some())
+            .finish()
+    }
+}
+
+impl LinearSolver {
+    /// A solver for square matrices with CSC pattern `(col_ptr, row_idx)`
+    /// (rows sorted in each column).
+    pub fn new(col_ptr: &[usize], row_idx: &[usize]) -> Result<Self, LinearSolveError> {
+        let n = col_ptr.len() - 1;
+        let symbolic =
+            SymbolicSparseColMat::new_checked(n, n, col_ptr.to_vec(), None, row_idx.to_vec());
+        Ok(Self {
+            symbolic,
+            llt: None,
+            lu: None,
+            memory: MemBuffer::new(StackReq::EMPTY),
+            memory_req: StackReq::EMPTY,
+            rhs: Mat::zeros(n, 1),
+            // A second thread does not speed up faer's sparse factorisation
+            // at these sizes (FACTS.md); the threads serve assembly.
+            par: Par::Seq,
+        })
+    }
+
+    /// Dimension of the system.
+    pub fn dimension(&self) -> usize {
+        self.symbolic.nrows()
+    }
+
+    fn ensure_memory(&mut self, req: StackReq) {
+        let combined = self.memory_req.or(req);
+        if combined != self.memory_req {
+            self.memory_req = combined;
+            self.memory = MemBuffer::new(combined);
+        }
+    }
+
+    /// Solves `A x = b` in place (`rhs`: `b` in, `x` out) for the values
+    /// `values` on the pattern. With `symmetric`, Cholesky is tried first and
+    /// LU is the fallback when `A` is not positive definite.
+    pub fn solve(
+        &mut self,
+        values: &[f64],
+        symmetric: bool,
+        rhs: &mut [f64],
+    ) -> Result<Factorization, LinearSolveError> {
+        let n = self.dimension();
+        for (i, v) in rhs.iter().enumerate() {
+            self.rhs[(i, 0)] = *v;
+        }
+        let used = if symmetric && self.solve_cholesky(values)? {
+            Factorization::Cholesky
+        } else {
+            for (i, v) in rhs.iter().enumerate() {
+                self.rhs[(i, 0)] = *v;
+            }
+            self.solve_lu(values)?;
+            Factorization::Lu
+        };
+        for (i, x) in rhs.iter_mut().enumerate().take(n) {
+            *x = self.rhs[(i, 0)];
+        }
+        if rhs.iter().any(|x| !x.is_finite()) {
+            return Err(LinearSolveError::Singular {
+                detail: "the solution is not finite".into(),
+            });
+        }
+        Ok(used)
+    }
+
+    /// Returns `Ok(false)` when the matrix is not positive definite.
+    fn solve_cholesky(&mut self, values: &[f64]) -> Result<bool, LinearSolveError> {
+        if self.llt.is_none() {
+            let symb = factorize_symbolic_cholesky(
+                self.symbolic.as_ref(),
+                Side::Lower,
+                SymmetricOrdering::Amd,
+                Default::default(),
+            )
+            .map_err(|e| LinearSolveError::Factorization(format!("{e:?}")))?;
+            let l = vec![0.0; symb.len_val()];
+            self.llt = Some((symb, l));
+        }
+        let par = self.par;
+        let req = {
+            let (symb, _) = self.llt.as_ref().expect("set above");
+            symb.factorize_numeric_llt_scratch::<f64>(par, Default::default())
+                .or(symb.solve_in_place_scratch::<f64>(1, par))
+        };
+        self.ensure_memory(req);
+        let (symb, l) = self.llt.as_mut().expect("set above");
+        let a = SparseColMatRef::new(self.symbolic.as_ref(), values);
+        let stack = MemStack::new(&mut self.memory);
+        if symb
+            .factorize_numeric_llt::<f64>(
+                l,
+                a,
+                Side::Lower,
+                LltRegularization::default(),
+                par,
+                stack,
+                Default::default(),
+            )
+            .is_err()
+        {
+            return Ok(false);
+        }
+        LltRef::<usize, f64>::new(symb, l).solve_in_place_with_conj(
+            Conj::No,
+            self.rhs.as_mut(),
+            par,
+            stack,
+        );
+        Ok(true)
+    }
+
+    fn solve_lu(&mut self, values: &[f64]) -> Result<(), LinearSolveError> {
+        if self.lu.is_none() {
+            let symb = factorize_symbolic_lu(self.symbolic.as_ref(), Default::default())
+                .map_err(|e| LinearSolveError::Factorization(format!("{e:?}")))?;
+            self.lu = Some((symb, NumericLu::new()));
+        }
+        let par = self.par;
+        let req = {
+            let (symb, _) = self.lu.as_ref().expect("set above");
+            symb.factorize_numeric_lu_scratch::<f64>(par, Default::default())
+                .or(symb.solve_in_place_scratch::<f64>(1, par))
+        };
+        self.ensure_memory(req);
+        let (symb, numeric) = self.lu.as_mut().expect("set above");
+        let a = SparseColMatRef::new(self.symbolic.as_ref(), values);
+        let stack = MemStack::new(&mut self.memory);
+        let lu = symb
+            .factorize_numeric_lu::<f64>(numeric, a, par, stack, Default::default())
+            .map_err(|e| LinearSolveError::Singular {
+                detail: format!("{e:?}"),
+            })?;
+        lu.solve_in_place_with_conj(Conj::No, self.rhs.as_mut(), par, stack);
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 1D Laplacian plus identity: SPD, tridiagonal.
+    fn tridiagonal(n: usize, asym: f64) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
+        let (mut cp, mut ri, mut v) = (vec![0], vec![], vec![]);
+        for c in 0..n {
+            if c > 0 {
+                ri.push(c - 1);
+                v.push(-1.0 - asym);
+            }
+            ri.push(c);
+            v.push(3.0);
+            if c + 1 < n {
+                ri.push(c + 1);
+                v.push(-1.0 + asym);
+            }
+            cp.push(ri.len());
+        }
+        (cp, ri, v)
+    }
+
+    fn residual(cp: &[usize], ri: &[usize], v: &[f64], x: &[f64], b: &[f64]) -> f64 {
+        let mut r = b.to_vec();
+        for c in 0..cp.len() - 1 {
+            for k in cp[c]..cp[c + 1] {
+                r[ri[k]] -= v[k] * x[c];
+            }
+        }
+        r.iter().map(|x| x.abs()).fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn cholesky_and_lu_solve_and_are_reused() {
+        let n = 50;
+        for (asym, symmetric, expected) in [
+            (0.0, true, Factorization::Cholesky),
+            (0.3, false, Factorization::Lu),
+        ] {
+            let (cp, ri, v) = tridiagonal(n, asym);
+            let mut solver = LinearSolver::new(&cp, &ri).unwrap();
+            for round in 0..3 {
+                let b: Vec<f64> = (0..n).map(|i| (i + round) as f64).collect();
+                let mut x = b.clone();
+                assert_eq!(solver.solve(&v, symmetric, &mut x).unwrap(), expected);
+                assert!(residual(&cp, &ri, &v, &x, &b) < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn indefinite_symmetric_falls_back_to_lu() {
+        let (cp, ri, mut v) = tridiagonal(10, 0.0);
+        v.iter_mut().for_each(|x| *x = -*x);
+        let mut solver = LinearSolver::new(&cp, &ri).unwrap();
+        let b = vec![1.0; 10];
+        let mut x = b.clone();
+        assert_eq!(solver.solve(&v, true, &mut x).unwrap(), Factorization::Lu);
+        assert!(residual(&cp, &ri, &v, &x, &b) < 1e-12);
+    }
+}

@@ -1,0 +1,9 @@
+//! Sparse linear algebra and the Newton–Raphson iteration (SPEC §1.7).
+
+pub mod linear;
+pub mod newton;
+pub mod pattern;
+
+pub use linear::{Factorization, LinearSolveError, LinearSolver};
+pub use newton::{NewtonError, NewtonReport, NewtonSettings};
+pub use pattern::SparsePattern;

@@ -1,0 +1,195 @@
+//! Newton–Raphson on `G(Y) = 0` (SPEC §1.7).
+//!
+//! Each iteration solves `H dY = -G` and sets `Y <- Y + dY`. The iteration
+//! has converged when both
+//!
+//! * `|dY| / L <= tolerance`, with `L` the Euclidean norm of the initial
+//!   positions measured from their centroid: the spec's `|X|`, made
+//!   independent of where the origin lies and never zero for a mesh of
+//!   more than one node (the safeguard for `|X|` near zero); and
+//! * `|G| <= residual_tolerance * scale`, with `scale` the sum of the norms
+//!   of the force terms that make up `G` (internal, external, inertial),
+//!   so the test is relative to the forces at play.
+//!
+//! A first guess whose residual is already at round-off (`|G| <= 1e-13
+//! scale`, e.g. free fall from the Newmark predictor) is accepted with no
+//! iteration. NaN or infinite residuals, a residual that grows by `1e8`
+//! over the first one, and running out of iterations are errors that the
+//! time integrator answers by cutting the step.
+
+use super::linear::{Factorization, LinearSolveError, LinearSolver};
+
+/// Convergence settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NewtonSettings {
+    /// Bound on `|dY| / |X|` (dimensionless).
+    pub tolerance: f64,
+    /// Bound on `|G| / scale` (dimensionless).
+    pub residual_tolerance: f64,
+    /// Most iterations (linear solves) per step.
+    pub max_iterations: usize,
+}
+
+impl Default for NewtonSettings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-8,
+            residual_tolerance: 1e-6,
+            max_iterations: 30,
+        }
+    }
+}
+
+/// How a converged Newton iteration went.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NewtonReport {
+    /// Linear solves performed.
+    pub iterations: usize,
+    /// `|G|` at each evaluation, the last one at the converged point.
+    pub residuals: Vec<f64>,
+    /// `|dY| / |X|` of each iteration.
+    pub increments: Vec<f64>,
+    /// Factorisation used by the last solve, if any.
+    pub factorization: Option<Factorization>,
+}
+
+/// Why Newton stopped without converging.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum NewtonError {
+    /// Out of iterations.
+    #[error(
+        "no convergence in {iterations} iterations (residual {residual:.3e}, relative increment {increment:.3e})"
+    )]
+    NotConverged {
+        /// Iterations done.
+        iterations: usize,
+        /// Last `|G|` (N).
+        residual: f64,
+        /// Last `|dY| / |X|`.
+        increment: f64,
+    },
+    /// The residual grew out of bounds.
+    #[error("diverged at iteration {iteration}: residual {residual:.3e} N")]
+    Diverged {
+        /// Iteration.
+        iteration: usize,
+        /// `|G|` (N).
+        residual: f64,
+    },
+    /// NaN or infinity in the residual.
+    #[error("non-finite residual at iteration {iteration}")]
+    NonFinite {
+        /// Iteration.
+        iteration: usize,
+    },
+    /// The linear system could not be solved.
+    #[error(transparent)]
+    Linear(#[from] LinearSolveError),
+}
+
+/// What an evaluation of the system reports besides `G` and `H`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Evaluation {
+    /// Sum of the norms of the force terms of `G` (N).
+    pub scale: f64,
+    /// Whether `H` is symmetric (Cholesky applies).
+    pub symmetric: bool,
+}
+
+/// A nonlinear system `G(Y) = 0` with Hessian `H = dG/dY` on a fixed pattern.
+pub trait NewtonSystem {
+    /// Writes `G(y)` into `g` and, if asked, `H(y)` into `h`.
+    fn evaluate(&mut self, y: &[f64], g: &mut [f64], h: Option<&mut [f64]>) -> Evaluation;
+}
+
+/// Buffers reused across Newton iterations and steps.
+#[derive(Debug)]
+pub struct NewtonWorkspace {
+    g: Vec<f64>,
+    h: Vec<f64>,
+    dy: Vec<f64>,
+    /// The sparse direct solver (symbolic analysis kept).
+    pub linear: LinearSolver,
+}
+
+impl NewtonWorkspace {
+    /// Buffers for `n` unknowns and `nnz` Hessian entries on `linear`'s pattern.
+    pub fn new(n: usize, nnz: usize, linear: LinearSolver) -> Self {
+        Self {
+            g: vec![0.0; n],
+            h: vec![0.0; nnz],
+            dy: vec![0.0; n],
+            linear,
+        }
+    }
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// Runs Newton from the first guess in `y` (overwritten by the solution).
+/// `length`: the reference length `|X|` of the convergence test (m).
+pub fn solve(
+    system: &mut impl NewtonSystem,
+    y: &mut [f64],
+    length: f64,
+    settings: &NewtonSettings,
+    ws: &mut NewtonWorkspace,
+) -> Result<NewtonReport, NewtonError> {
+    let mut report = NewtonReport {
+        iterations: 0,
+        residuals: Vec::new(),
+        increments: Vec::new(),
+        factorization: None,
+    };
+    let mut first_residual = None;
+    let mut increment = f64::INFINITY;
+    loop {
+        let it = report.iterations;
+        // Near convergence, evaluate G alone first: the Hessian is needed
+        // only if the point is not yet accepted.
+        let likely_done = increment <= settings.tolerance;
+        let mut eval = system.evaluate(y, &mut ws.g, (!likely_done).then_some(&mut ws.h[..]));
+        let residual = norm(&ws.g);
+        report.residuals.push(residual);
+        if !residual.is_finite() {
+            return Err(NewtonError::NonFinite { iteration: it });
+        }
+        let r0 = *first_residual.get_or_insert(residual);
+        let small = residual <= settings.residual_tolerance * eval.scale;
+        if (it > 0 && increment <= settings.tolerance && small)
+            || residual <= 1e-13 * eval.scale
+            || residual == 0.0
+        {
+            return Ok(report);
+        }
+        if residual > 1e8 * r0.max(eval.scale) && it > 0 {
+            return Err(NewtonError::Diverged {
+                iteration: it,
+                residual,
+            });
+        }
+        if it >= settings.max_iterations {
+            return Err(NewtonError::NotConverged {
+                iterations: it,
+                residual,
+                increment,
+            });
+        }
+        if likely_done {
+            eval = system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]));
+        }
+        for (d, g) in ws.dy.iter_mut().zip(&ws.g) {
+            *d = -g;
+        }
+        report.factorization = Some(ws.linear.solve(&ws.h, eval.symmetric, &mut ws.dy)?);
+        for (yi, d) in y.iter_mut().zip(&ws.dy) {
+            *yi += d;
+        }
+        increment = norm(&ws.dy) / length;
+        report.increments.push(increment);
+        report.iterations += 1;
+    }
+}

@@ -1,0 +1,268 @@
+//! The sparsity pattern of the Hessian, computed once per mesh, and the
+//! element colouring used for parallel assembly.
+//!
+//! The pattern is the node graph (nodes sharing an element), expanded to
+//! 3x3 blocks, stored in compressed sparse columns (CSC) with sorted rows.
+//! Column `3b + j` holds, for each neighbour `a` of node `b` in increasing
+//! order, the rows `3a, 3a + 1, 3a + 2`; so the value index of entry `(3a +
+//! i, 3b + j)` follows from the node-graph position `p` of `a` in column `b`
+//! without a search:
+//!
+//! ```text
+//! index = 9 ptr[b] + 3 j deg(b) + 3 (p - ptr[b]) + i
+//! ```
+//!
+//! Element blocks `(a, b)` store `p` once ([`SparsePattern::element_blocks`]),
+//! so assembly scatters straight into the CSC values ("scatter map").
+
+/// CSC pattern of the DOF-level Hessian plus the node graph behind it.
+#[derive(Debug, Clone)]
+pub struct SparsePattern {
+    /// Node graph: column `b` lists rows `node_rows[node_ptr[b]..node_ptr[b + 1]]`.
+    node_ptr: Vec<usize>,
+    node_rows: Vec<usize>,
+    /// DOF-level CSC column pointers (length `3 nodes + 1`).
+    pub col_ptr: Vec<usize>,
+    /// DOF-level CSC row indices, sorted within each column.
+    pub row_idx: Vec<usize>,
+    /// `transpose[k]`: value index of the entry mirrored about the diagonal.
+    transpose: Vec<usize>,
+    /// Value index of each diagonal entry.
+    diagonal: Vec<usize>,
+}
+
+impl SparsePattern {
+    /// Builds the pattern of `nodes` nodes coupled by `elements` (lists of
+    /// node indices, already validated to be in range).
+    pub fn new<'a>(nodes: usize, elements: impl Iterator<Item = &'a [usize]> + Clone) -> Self {
+        let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); nodes];
+        for el in elements {
+            for &a in el {
+                for &b in el {
+                    neighbours[b].push(a);
+                }
+            }
+        }
+        let mut node_ptr = Vec::with_capacity(nodes + 1);
+        let mut node_rows = Vec::new();
+        node_ptr.push(0);
+        for (b, list) in neighbours.iter_mut().enumerate() {
+            list.push(b);
+            list.sort_unstable();
+            list.dedup();
+            node_rows.extend_from_slice(list);
+            node_ptr.push(node_rows.len());
+        }
+        drop(neighbours);
+        let ndof = 3 * nodes;
+        let mut col_ptr = Vec::with_capacity(ndof + 1);
+        let mut row_idx = Vec::with_capacity(9 * node_rows.len());
+        col_ptr.push(0);
+        for b in 0..nodes {
+            let rows = &node_rows[node_ptr[b]..node_ptr[b + 1]];
+            for _j in 0..3 {
+                for &a in rows {
+                    row_idx.extend_from_slice(&[3 * a, 3 * a + 1, 3 * a + 2]);
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        let mut pattern = Self {
+            node_ptr,
+            node_rows,
+            col_ptr,
+            row_idx,
+            transpose: Vec::new(),
+            diagonal: Vec::new(),
+        };
+        pattern.transpose = (0..ndof)
+            .flat_map(|c| (pattern.col_ptr[c]..pattern.col_ptr[c + 1]).map(move |k| (c, k)))
+            .map(|(c, k)| pattern.find(c, pattern.row_idx[k]).unwrap_or(usize::MAX))
+            .collect();
+        pattern.diagonal = (0..ndof)
+            .map(|d| pattern.find(d, d).unwrap_or(usize::MAX))
+            .collect();
+        pattern
+    }
+
+    /// Number of rows (= columns).
+    pub fn dimension(&self) -> usize {
+        self.col_ptr.len() - 1
+    }
+
+    /// Number of stored entries.
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    /// Value index of DOF entry `(row, col)`, if stored (binary search; for
+    /// set-up, not for hot loops).
+    pub fn find(&self, row: usize, col: usize) -> Option<usize> {
+        let range = self.col_ptr[col]..self.col_ptr[col + 1];
+        self.row_idx[range.clone()]
+            .binary_search(&row)
+            .ok()
+            .map(|k| range.start + k)
+    }
+
+    /// Node-graph position of node `a` in column `b`.
+    pub fn node_block(&self, a: usize, b: usize) -> Option<usize> {
+        let range = self.node_ptr[b]..self.node_ptr[b + 1];
+        self.node_rows[range.clone()]
+            .binary_search(&a)
+            .ok()
+            .map(|k| range.start + k)
+    }
+
+    /// Value index of entry `(3a + i, 3b + j)` from the node-graph position
+    /// `p` of `a` in column `b`.
+    #[inline]
+    pub fn entry(&self, p: usize, b: usize, i: usize, j: usize) -> usize {
+        let start = self.node_ptr[b];
+        let degree = self.node_ptr[b + 1] - start;
+        9 * start + 3 * j * degree + 3 * (p - start) + i
+    }
+
+    /// Node-graph CSC: `(ptr, rows)`.
+    pub fn node_graph(&self) -> (&[usize], &[usize]) {
+        (&self.node_ptr, &self.node_rows)
+    }
+
+    /// For each element, its `n x n` node-graph positions `p_ab` (row-major
+    /// in `(a, b)`), flattened.
+    pub fn element_blocks<'a>(&self, elements: impl Iterator<Item = &'a [usize]>) -> Vec<usize> {
+        let mut blocks = Vec::new();
+        for el in elements {
+            for &a in el {
+                for &b in el {
+                    blocks.push(self.node_block(a, b).unwrap_or(usize::MAX));
+                }
+            }
+        }
+        blocks
+    }
+
+    /// Value index of the mirrored entry of value index `k`.
+    #[inline]
+    pub fn transpose_of(&self, k: usize) -> usize {
+        self.transpose[k]
+    }
+
+    /// Value index of the diagonal entry of DOF `d`.
+    #[inline]
+    pub fn diagonal_of(&self, d: usize) -> usize {
+        self.diagonal[d]
+    }
+
+    /// Largest `|A_ij - A_ji|` relative to the largest `|A_ij|` (0 for a zero matrix).
+    pub fn asymmetry(&self, values: &[f64]) -> f64 {
+        let mut max = 0.0f64;
+        let mut diff = 0.0f64;
+        for (k, v) in values.iter().enumerate() {
+            max = max.max(v.abs());
+            diff = diff.max((v - values[self.transpose[k]]).abs());
+        }
+        if max > 0.0 { diff / max } else { 0.0 }
+    }
+}
+
+/// Greedy colouring of elements so that no two elements of one colour share
+/// a node: the elements of one colour can be assembled in parallel without
+/// write conflicts.
+pub fn colour_elements<'a>(
+    nodes: usize,
+    elements: impl Iterator<Item = &'a [usize]> + Clone,
+) -> Vec<Vec<usize>> {
+    let count = elements.clone().count();
+    // Node -> incident elements.
+    let mut ptr = vec![0usize; nodes + 1];
+    for el in elements.clone() {
+        for &a in el {
+            ptr[a + 1] += 1;
+        }
+    }
+    for i in 0..nodes {
+        ptr[i + 1] += ptr[i];
+    }
+    let mut fill = ptr.clone();
+    let mut incident = vec![0usize; ptr[nodes]];
+    for (e, el) in elements.clone().enumerate() {
+        for &a in el {
+            incident[fill[a]] = e;
+            fill[a] += 1;
+        }
+    }
+    let mut colour = vec![usize::MAX; count];
+    let mut used: Vec<usize> = Vec::new(); // used[c] == e marks colour c taken for element e
+    let mut colours: Vec<Vec<usize>> = Vec::new();
+    for (e, el) in elements.enumerate() {
+        for &a in el {
+            for &other in &incident[ptr[a]..ptr[a + 1]] {
+                let c = colour[other];
+                if c != usize::MAX {
+                    used[c] = e;
+                }
+            }
+        }
+        let c = (0..colours.len())
+            .find(|&c| used[c] != e)
+            .unwrap_or(colours.len());
+        if c == colours.len() {
+            colours.push(Vec::new());
+            used.push(usize::MAX);
+        }
+        colour[e] = c;
+        colours[c].push(e);
+    }
+    colours
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn entry_formula_matches_search_and_transpose_is_an_involution() {
+        let elements = [vec![0usize, 1, 2], vec![1, 3, 2], vec![3, 4, 2]];
+        let p = SparsePattern::new(5, elements.iter().map(|e| e.as_slice()));
+        for el in &elements {
+            for &a in el {
+                for &b in el {
+                    let pb = p.node_block(a, b).unwrap();
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            assert_eq!(Some(p.entry(pb, b, i, j)), p.find(3 * a + i, 3 * b + j));
+                        }
+                    }
+                }
+            }
+        }
+        for k in 0..p.nnz() {
+            assert_eq!(p.transpose_of(p.transpose_of(k)), k);
+        }
+        assert_eq!(p.find(0, 12), None);
+    }
+
+    #[test]
+    fn colours_never_share_a_node() {
+        let mesh = crate::mesh::generate::rectangle(
+            [1.0, 1.0],
+            [7, 5],
+            crate::mesh::generate::Pattern::Alternate,
+            [0.0; 3],
+            crate::mesh::ElementOrder::Quadratic,
+        );
+        let colours = colour_elements(mesh.node_count(), mesh.elements());
+        let total: usize = colours.iter().map(Vec::len).sum();
+        assert_eq!(total, mesh.element_count());
+        for c in &colours {
+            let mut seen = vec![false; mesh.node_count()];
+            for &e in c {
+                for &a in mesh.element(e) {
+                    assert!(!seen[a]);
+                    seen[a] = true;
+                }
+            }
+        }
+    }
+}
