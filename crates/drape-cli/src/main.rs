@@ -1,1 +1,246 @@
-fn main() {}
+//! `drape`: run, check and list membrane simulations (SPEC §3).
+//!
+//! Exit codes: 0 success, 1 a run that failed (outputs up to the failure
+//! are on disk), 2 bad input (scenario, mesh, command line).
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+use drape::scenario::{Scenario, ScenarioError, Setup};
+use drape::simulation::{self, RunError, StepInfo};
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+mod examples;
+
+/// Membranes and fabrics in large displacement: positional finite elements,
+/// Newmark dynamics, Newton–Raphson.
+#[derive(Parser)]
+#[command(name = "drape", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scenario and write history.csv, fields.pvd (+ fields/*.vtu) and summary.json.
+    ///
+    /// Progress (step, time, Newton iterations) goes to the terminal; the
+    /// exit code is 1 when the run fails (everything computed so far is
+    /// kept) and 2 when the scenario is invalid.
+    Run {
+        /// The scenario file (TOML).
+        scenario: PathBuf,
+        /// Output directory [default: ./out/<scenario stem>].
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Print nothing but errors.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Validate a scenario and summarise it (mesh, loads, schedule) without running it.
+    Check {
+        /// The scenario file (TOML).
+        scenario: PathBuf,
+    },
+    /// List the bundled example scenarios, or print or write one.
+    Example {
+        /// Example name (as listed); without it, list them.
+        name: Option<String>,
+        /// Write the example to this file instead of printing it.
+        #[arg(long)]
+        write: Option<PathBuf>,
+    },
+}
+
+/// An input error (exit 2) or a run failure (exit 1).
+enum Failure {
+    Input(anyhow::Error),
+    Run(anyhow::Error),
+}
+
+impl From<ScenarioError> for Failure {
+    fn from(e: ScenarioError) -> Self {
+        Failure::Input(e.into())
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Run {
+            scenario,
+            out,
+            quiet,
+        } => run(&scenario, out, quiet),
+        Command::Check { scenario } => check(&scenario),
+        Command::Example { name, write } => example(name.as_deref(), write.as_deref()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Input(e)) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+        Err(Failure::Run(e)) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn load(path: &Path) -> Result<Setup, Failure> {
+    let (scenario, source) = Scenario::read(path)?;
+    Ok(scenario.build(path, &source)?)
+}
+
+fn check(path: &Path) -> Result<(), Failure> {
+    let setup = load(path)?;
+    let m = &setup.model;
+    println!("{}: ok", path.display());
+    println!("  title     {}", setup.title);
+    println!(
+        "  mesh      {} nodes, {} triangles of order {}, {} DOF ({} fixed)",
+        m.mesh.node_count(),
+        m.mesh.element_count(),
+        m.mesh.order.degree(),
+        m.dofs(),
+        m.fixed_count()
+    );
+    println!("  mass      {:.6e} kg ({:?})", m.total_mass(), m.mass_kind);
+    println!("  loads     {}", m.loads.len());
+    match &setup.analysis {
+        drape::scenario::Analysis::Dynamic { newmark, segments } => {
+            let steps: usize = segments.iter().map(|s| s.0).sum();
+            let end: f64 = segments.iter().map(|(n, dt)| *n as f64 * dt).sum();
+            println!(
+                "  dynamic   beta = {}, gamma = {}, {steps} steps to t = {end} s",
+                newmark.beta, newmark.gamma
+            );
+        }
+        drape::scenario::Analysis::Static { steps } => {
+            println!("  static    {steps} load increments")
+        }
+    }
+    for mon in &setup.monitors {
+        println!(
+            "  monitor   {} -> node {} at {:?}",
+            mon.name, mon.node, m.mesh.nodes[mon.node]
+        );
+    }
+    Ok(())
+}
+
+fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), Failure> {
+    let setup = load(path)?;
+    let out = out.unwrap_or_else(|| {
+        let stem = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "run".into());
+        PathBuf::from("out").join(stem)
+    });
+    let terminal = std::io::stderr().is_terminal();
+    let start = Instant::now();
+    let mut last_print = Instant::now();
+    let mut observer = |info: &StepInfo| {
+        if quiet {
+            return;
+        }
+        let line = format!(
+            "step {:>6}  t = {:.5e} / {:.4e} s  dt = {:.2e}  Newton {:>2}{}  KE {:.3e} J  SE {:.3e} J",
+            info.step,
+            info.time,
+            info.end_time,
+            info.dt,
+            info.iterations,
+            if info.cutbacks > 0 {
+                format!("  (cut back x{})", info.cutbacks)
+            } else {
+                String::new()
+            },
+            info.kinetic_energy,
+            info.strain_energy
+        );
+        if terminal {
+            eprint!("\r{line}");
+            let _ = std::io::stderr().flush();
+        } else if last_print.elapsed().as_secs_f64() >= 1.0
+            || info.time >= info.end_time * (1.0 - 1e-12)
+        {
+            eprintln!("{line}");
+            last_print = Instant::now();
+        }
+    };
+    let result = simulation::run(&setup, &out, &mut observer);
+    if terminal && !quiet {
+        eprintln!();
+    }
+    match result {
+        Ok(summary) => {
+            if !quiet {
+                println!(
+                    "completed {} steps to t = {:.6} s in {:.2} s ({} Newton iterations, {} cut-back steps)",
+                    summary.steps,
+                    summary.time,
+                    start.elapsed().as_secs_f64(),
+                    summary.newton_iterations,
+                    summary.cutbacks
+                );
+                println!(
+                    "energy: kinetic {:.6e} J + strain {:.6e} J - work of loads {:.6e} J = {:.6e} J",
+                    summary.kinetic_energy,
+                    summary.strain_energy,
+                    summary.external_work,
+                    summary.kinetic_energy + summary.strain_energy - summary.external_work
+                );
+                for (name, p) in &summary.monitors {
+                    println!("monitor {name}: [{:.6}, {:.6}, {:.6}]", p[0], p[1], p[2]);
+                }
+                println!("results in {}", out.display());
+            }
+            Ok(())
+        }
+        Err(e @ RunError::Io { .. }) => Err(Failure::Run(anyhow::Error::new(e))),
+        Err(e) => Err(Failure::Run(
+            anyhow::Error::new(e).context(format!("run of {} failed", path.display())),
+        )),
+    }
+}
+
+fn example(name: Option<&str>, write: Option<&Path>) -> Result<(), Failure> {
+    let Some(name) = name else {
+        println!("bundled examples (drape example NAME [--write FILE]):");
+        for (n, text) in examples::ALL {
+            let first = text
+                .lines()
+                .next()
+                .unwrap_or("")
+                .trim_start_matches('#')
+                .trim();
+            println!("  {n:<28} {first}");
+        }
+        return Ok(());
+    };
+    let name = name.trim_end_matches(".toml");
+    let text = examples::ALL
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, t)| *t)
+        .ok_or_else(|| {
+            let names: Vec<&str> = examples::ALL.iter().map(|(n, _)| *n).collect();
+            Failure::Input(anyhow::anyhow!(
+                "no example named {name:?}; the examples are: {}",
+                names.join(", ")
+            ))
+        })?;
+    match write {
+        Some(path) => std::fs::write(path, text)
+            .with_context(|| format!("cannot write {}", path.display()))
+            .map_err(Failure::Run)?,
+        None => print!("{text}"),
+    }
+    Ok(())
+}

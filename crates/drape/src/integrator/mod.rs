@@ -1,8 +1,8 @@
 //! Time integration: Newmark-beta in positions (dynamic) and load stepping
 //! (static), each step solved by Newton–Raphson (SPEC §1.6–1.7).
 
-mod newmark;
-mod statics;
+pub mod newmark;
+pub mod statics;
 
 pub use newmark::Newmark;
 pub use statics::StaticStepper;

@@ -17,8 +17,8 @@
 //! use.
 
 pub mod generate;
-// pub mod gmsh;
-// pub mod obj;
+pub mod gmsh;
+pub mod obj;
 mod validate;
 
 pub use validate::MeshError;

@@ -196,3 +196,33 @@ impl Model {
         ElementResults { stress, principal }
     }
 }
+
+impl Model {
+    /// Smallest principal stretch over all quadrature points, `sqrt` of the
+    /// smallest eigenvalue of `C = F^T F`, and the element where it occurs.
+    pub fn min_stretch(&self, y: &[f64]) -> (f64, usize) {
+        let n = self.mesh.order.nodes_per_element();
+        (0..self.mesh.element_count())
+            .into_par_iter()
+            .map(|e| {
+                let mut ye = [[0.0; 3]; MAX_NODES];
+                for (a, &node) in self.mesh.element(e).iter().enumerate() {
+                    ye[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
+                }
+                let (grad, weight) = self.geometry.element(e);
+                let mut least = f64::INFINITY;
+                for q in 0..weight.len() {
+                    let f = crate::element::membrane::deformation_gradient(
+                        &ye[..n],
+                        &grad[q * n..(q + 1) * n],
+                    );
+                    let e2 = crate::element::membrane::green_lagrange(&f);
+                    // C = I + 2E; its smallest eigenvalue from E's.
+                    let (_, e_min) = principal_values([e2[0], e2[1], 0.5 * e2[2]]);
+                    least = least.min((1.0 + 2.0 * e_min).max(0.0).sqrt());
+                }
+                (least, e)
+            })
+            .reduce(|| (f64::INFINITY, 0), |a, b| if b.0 < a.0 { b } else { a })
+    }
+}

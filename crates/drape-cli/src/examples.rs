@@ -1,0 +1,13 @@
+//! The example scenarios bundled into the binary (the files of `examples/`).
+
+/// `(name, text)` of every bundled example.
+pub const ALL: &[(&str, &str)] = &[
+    (
+        "hanging-cloth",
+        include_str!("../../../examples/hanging-cloth.toml"),
+    ),
+    (
+        "inflated-disc",
+        include_str!("../../../examples/inflated-disc.toml"),
+    ),
+];

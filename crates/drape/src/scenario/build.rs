@@ -1,0 +1,802 @@
+//! Checks a parsed [`Scenario`] and builds the model, schedule and monitors.
+
+use super::locate::line_of;
+use super::{
+    AnalysisKind, BoxSpec, FixSpec, LoadKindSpec, LoadSpec, MeshShape, MeshSpec, Scenario,
+    ScenarioError,
+};
+use crate::element::membrane::Section;
+use crate::integrator::Newmark;
+use crate::load::{Load, LoadKind};
+use crate::material::SaintVenantKirchhoff;
+use crate::mesh::{ElementOrder, Mesh, generate};
+use crate::model::Model;
+use crate::solver::NewtonSettings;
+use std::path::{Path, PathBuf};
+
+/// Most nodes a generated mesh may have (a guard against typos such as
+/// `divisions = [200000, 200000]`, which would exhaust memory).
+const MAX_GENERATED_NODES: usize = 20_000_000;
+
+/// A node whose position is recorded in the history.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Monitor {
+    /// Name from the scenario.
+    pub name: String,
+    /// Node index.
+    pub node: usize,
+}
+
+/// How time (or load) advances.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Analysis {
+    /// Newmark dynamics over a schedule of `(steps, dt)` segments.
+    Dynamic {
+        /// Newmark parameters.
+        newmark: Newmark,
+        /// `(steps, dt)` segments.
+        segments: Vec<(usize, f64)>,
+    },
+    /// Static load stepping in `steps` equal increments.
+    Static {
+        /// Increments.
+        steps: usize,
+    },
+}
+
+/// Everything needed to run a scenario.
+#[derive(Debug)]
+pub struct Setup {
+    /// Title.
+    pub title: String,
+    /// The discrete model.
+    pub model: Model,
+    /// Dynamic or static.
+    pub analysis: Analysis,
+    /// Newton settings.
+    pub newton: NewtonSettings,
+    /// Most halvings of a failing step.
+    pub max_cutbacks: usize,
+    /// Field output interval (steps).
+    pub output_every: usize,
+    /// Monitored nodes.
+    pub monitors: Vec<Monitor>,
+}
+
+struct Checker<'a> {
+    file: &'a Path,
+    source: &'a str,
+}
+
+impl Checker<'_> {
+    fn invalid(
+        &self,
+        table: &str,
+        index: Option<usize>,
+        key: &str,
+        message: String,
+    ) -> ScenarioError {
+        let path = match index {
+            Some(i) => format!("{table}[{i}].{key}"),
+            None if table.is_empty() => key.to_string(),
+            None => format!("{table}.{key}"),
+        };
+        ScenarioError::Invalid {
+            file: self.file.to_path_buf(),
+            line: line_of(self.source, table, index, key),
+            key: path,
+            message,
+        }
+    }
+
+    fn positive(
+        &self,
+        table: &str,
+        index: Option<usize>,
+        key: &str,
+        v: f64,
+    ) -> Result<f64, ScenarioError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.invalid(
+                table,
+                index,
+                key,
+                format!("must be a positive finite number, not {v}"),
+            ))
+        }
+    }
+
+    fn finite(
+        &self,
+        table: &str,
+        index: Option<usize>,
+        key: &str,
+        v: &[f64],
+    ) -> Result<(), ScenarioError> {
+        if v.iter().all(|x| x.is_finite()) {
+            Ok(())
+        } else {
+            Err(self.invalid(table, index, key, format!("must be finite, not {v:?}")))
+        }
+    }
+
+    fn required<T: Clone>(
+        &self,
+        table: &str,
+        index: Option<usize>,
+        key: &str,
+        v: &Option<T>,
+        why: &str,
+    ) -> Result<T, ScenarioError> {
+        v.clone()
+            .ok_or_else(|| self.invalid(table, index, key, format!("is required {why}")))
+    }
+
+    fn absent<T>(
+        &self,
+        table: &str,
+        index: Option<usize>,
+        key: &str,
+        v: &Option<T>,
+        why: &str,
+    ) -> Result<(), ScenarioError> {
+        match v {
+            Some(_) => Err(self.invalid(table, index, key, format!("does not apply {why}"))),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Scenario {
+    /// Checks every value and builds the [`Setup`]. `file` is the scenario's
+    /// path (for messages and relative paths), `source` its text (for line
+    /// numbers).
+    pub fn build(&self, file: &Path, source: &str) -> Result<Setup, ScenarioError> {
+        let c = Checker { file, source };
+        let base = file.parent().map(Path::to_path_buf).unwrap_or_default();
+        let mesh = build_mesh(&c, &self.mesh, &base)?;
+
+        let m = &self.material;
+        if m.model != "saint-venant-kirchhoff" {
+            return Err(c.invalid(
+                "material",
+                None,
+                "model",
+                format!("must be \"saint-venant-kirchhoff\", not {:?}", m.model),
+            ));
+        }
+        let young = c.positive("material", None, "youngs_modulus", m.youngs_modulus)?;
+        if !(m.poisson_ratio.is_finite() && m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5) {
+            return Err(c.invalid(
+                "material",
+                None,
+                "poisson_ratio",
+                format!("must lie in (-1, 0.5), not {}", m.poisson_ratio),
+            ));
+        }
+        let thickness = c.positive("material", None, "thickness", m.thickness)?;
+        let is_static = self.analysis.kind == AnalysisKind::Static;
+        let density = if is_static && m.density == 0.0 {
+            0.0
+        } else {
+            c.positive("material", None, "density", m.density)?
+        };
+        c.finite("material", None, "prestress", &[m.prestress])?;
+        match m.wrinkling.as_str() {
+            "none" => {}
+            "stress-projection" | "relaxed-energy" => {
+                return Err(c.invalid(
+                    "material",
+                    None,
+                    "wrinkling",
+                    format!(
+                        "{:?} is not available in this version; use \"none\"",
+                        m.wrinkling
+                    ),
+                ));
+            }
+            other => {
+                return Err(c.invalid(
+                    "material",
+                    None,
+                    "wrinkling",
+                    format!("must be \"none\" or \"stress-projection\", not {other:?}"),
+                ));
+            }
+        }
+
+        let mut loads = Vec::new();
+        for (i, l) in self.loads.iter().enumerate() {
+            loads.push(build_load(&c, &mesh, i, l)?);
+        }
+        let mut fixed = vec![false; 3 * mesh.node_count()];
+        for (i, f) in self.fixes.iter().enumerate() {
+            build_fix(&c, &mesh, i, f, &mut fixed)?;
+        }
+        if !self.obstacles.is_empty() {
+            return Err(c.invalid(
+                "obstacle",
+                Some(0),
+                "shape",
+                "contact with obstacles is not available in this version".into(),
+            ));
+        }
+        if let Some(contact) = &self.contact {
+            let _ = contact;
+            return Err(c.invalid(
+                "contact",
+                None,
+                "method",
+                "contact is not available in this version".into(),
+            ));
+        }
+
+        let analysis = match self.analysis.kind {
+            AnalysisKind::Dynamic => {
+                c.absent(
+                    "analysis",
+                    None,
+                    "steps",
+                    &self.analysis.steps,
+                    "to a dynamic analysis (use [time] segments)",
+                )?;
+                let time = c.required(
+                    "time",
+                    None,
+                    "segments",
+                    &self.time,
+                    "for a dynamic analysis (a [time] table with segments)",
+                )?;
+                if !(time.beta.is_finite() && time.beta > 0.0) {
+                    return Err(c.invalid(
+                        "time",
+                        None,
+                        "beta",
+                        format!("must be positive, not {}", time.beta),
+                    ));
+                }
+                if !(time.gamma.is_finite() && time.gamma >= 0.5) {
+                    return Err(c.invalid(
+                        "time",
+                        None,
+                        "gamma",
+                        format!(
+                            "must be >= 0.5 (below, Newmark amplifies), not {}",
+                            time.gamma
+                        ),
+                    ));
+                }
+                if time.segments.is_empty() {
+                    return Err(c.invalid(
+                        "time",
+                        None,
+                        "segments",
+                        "must list at least one { steps, dt }".into(),
+                    ));
+                }
+                let mut segments = Vec::new();
+                for (k, s) in time.segments.iter().enumerate() {
+                    if s.steps == 0 {
+                        return Err(c.invalid(
+                            "time",
+                            None,
+                            "segments",
+                            format!("segment {k}: steps must be at least 1"),
+                        ));
+                    }
+                    if !(s.dt.is_finite() && s.dt > 0.0) {
+                        return Err(c.invalid(
+                            "time",
+                            None,
+                            "segments",
+                            format!(
+                                "segment {k}: dt must be a positive finite number, not {}",
+                                s.dt
+                            ),
+                        ));
+                    }
+                    segments.push((s.steps, s.dt));
+                }
+                Analysis::Dynamic {
+                    newmark: Newmark {
+                        beta: time.beta,
+                        gamma: time.gamma,
+                    },
+                    segments,
+                }
+            }
+            AnalysisKind::Static => {
+                if self.time.is_some() {
+                    return Err(c.invalid(
+                        "time",
+                        None,
+                        "segments",
+                        "does not apply to a static analysis (use [analysis] steps)".into(),
+                    ));
+                }
+                let steps = self.analysis.steps.unwrap_or(10);
+                if steps == 0 {
+                    return Err(c.invalid("analysis", None, "steps", "must be at least 1".into()));
+                }
+                Analysis::Static { steps }
+            }
+        };
+
+        let s = &self.solver;
+        if !(s.tolerance.is_finite() && s.tolerance > 0.0 && s.tolerance < 1.0) {
+            return Err(c.invalid(
+                "solver",
+                None,
+                "tolerance",
+                format!("must lie in (0, 1), not {}", s.tolerance),
+            ));
+        }
+        if !(s.residual_tolerance.is_finite()
+            && s.residual_tolerance > 0.0
+            && s.residual_tolerance < 1.0)
+        {
+            return Err(c.invalid(
+                "solver",
+                None,
+                "residual_tolerance",
+                format!("must lie in (0, 1), not {}", s.residual_tolerance),
+            ));
+        }
+        if s.max_iterations == 0 {
+            return Err(c.invalid(
+                "solver",
+                None,
+                "max_iterations",
+                "must be at least 1".into(),
+            ));
+        }
+        if s.max_cutbacks > 30 {
+            return Err(c.invalid(
+                "solver",
+                None,
+                "max_cutbacks",
+                format!("must be at most 30, not {}", s.max_cutbacks),
+            ));
+        }
+        if self.output.every == 0 {
+            return Err(c.invalid("output", None, "every", "must be at least 1".into()));
+        }
+
+        let (lo, hi) = mesh.bounding_box();
+        let size =
+            ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt();
+        let mut monitors = Vec::new();
+        for (i, mon) in self.monitors.iter().enumerate() {
+            if mon.name.is_empty()
+                || !mon
+                    .name
+                    .chars()
+                    .all(|ch| ch.is_ascii_alphanumeric() || ch == '_' || ch == '-')
+            {
+                return Err(c.invalid(
+                    "monitor",
+                    Some(i),
+                    "name",
+                    format!("must be letters, digits, '_' or '-', not {:?}", mon.name),
+                ));
+            }
+            if monitors.iter().any(|m: &Monitor| m.name == mon.name) {
+                return Err(c.invalid(
+                    "monitor",
+                    Some(i),
+                    "name",
+                    format!("{:?} is used twice", mon.name),
+                ));
+            }
+            c.finite("monitor", Some(i), "at", &mon.at)?;
+            let node = nearest(&c, &mesh, "monitor", i, mon.at, size)?;
+            monitors.push(Monitor {
+                name: mon.name.clone(),
+                node,
+            });
+        }
+
+        let model = Model::new(
+            mesh,
+            Box::new(SaintVenantKirchhoff::new(young, m.poisson_ratio)),
+            Section {
+                thickness,
+                prestress: m.prestress,
+            },
+            density,
+            loads,
+            fixed,
+            self.analysis.mass,
+        )
+        .map_err(|e| ScenarioError::Mesh {
+            file: file.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        let title = self.title.clone().unwrap_or_else(|| {
+            file.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        });
+        Ok(Setup {
+            title,
+            model,
+            analysis,
+            newton: NewtonSettings {
+                tolerance: s.tolerance,
+                residual_tolerance: s.residual_tolerance,
+                max_iterations: s.max_iterations,
+            },
+            max_cutbacks: s.max_cutbacks,
+            output_every: self.output.every,
+            monitors,
+        })
+    }
+}
+
+fn nearest(
+    c: &Checker,
+    mesh: &Mesh,
+    table: &str,
+    i: usize,
+    at: [f64; 3],
+    size: f64,
+) -> Result<usize, ScenarioError> {
+    let (node, distance) = mesh
+        .nearest_node(at)
+        .ok_or_else(|| c.invalid(table, Some(i), "at", "the mesh has no node".into()))?;
+    if distance > 0.1 * size {
+        return Err(c.invalid(table, Some(i), "at", format!(
+            "{at:?} is {distance:.4} m from the nearest node ({:?}), more than 10 % of the mesh's size {size:.4} m",
+            mesh.nodes[node]
+        )));
+    }
+    Ok(node)
+}
+
+fn build_mesh(c: &Checker, spec: &MeshSpec, base: &Path) -> Result<Mesh, ScenarioError> {
+    let t = "mesh";
+    let order =
+        match spec.order {
+            None => None,
+            Some(p) => Some(ElementOrder::from_degree(p).ok_or_else(|| {
+                c.invalid(t, None, "order", format!("must be 1, 2 or 3, not {p}"))
+            })?),
+        };
+    let center = spec.center.unwrap_or([0.0; 3]);
+    c.finite(t, None, "center", &center)?;
+    let mesh = match spec.shape {
+        MeshShape::Rectangle => {
+            for (key, v) in [
+                ("radius", spec.radius.is_some()),
+                ("rings", spec.rings.is_some()),
+                ("path", spec.path.is_some()),
+            ] {
+                if v {
+                    return Err(c.invalid(
+                        t,
+                        None,
+                        key,
+                        "does not apply to shape = \"rectangle\"".into(),
+                    ));
+                }
+            }
+            let size = c.required(
+                t,
+                None,
+                "size",
+                &spec.size,
+                "for shape = \"rectangle\" ([width, height] in m)",
+            )?;
+            for v in size {
+                c.positive(t, None, "size", v)?;
+            }
+            let div = c.required(
+                t,
+                None,
+                "divisions",
+                &spec.divisions,
+                "for shape = \"rectangle\" ([nx, ny])",
+            )?;
+            let p = order.unwrap_or(ElementOrder::Linear).degree();
+            if div[0] == 0 || div[1] == 0 {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    "divisions",
+                    format!("must be at least 1 in each direction, not {div:?}"),
+                ));
+            }
+            let nodes = (div[0].saturating_mul(p).saturating_add(1))
+                .saturating_mul(div[1].saturating_mul(p).saturating_add(1));
+            if nodes > MAX_GENERATED_NODES {
+                return Err(c.invalid(t, None, "divisions", format!("{div:?} would make {nodes} nodes, more than the limit {MAX_GENERATED_NODES}")));
+            }
+            generate::rectangle(
+                size,
+                div,
+                spec.pattern.unwrap_or(generate::Pattern::Right),
+                center,
+                order.unwrap_or(ElementOrder::Linear),
+            )
+        }
+        MeshShape::Disc => {
+            for (key, v) in [
+                ("size", spec.size.is_some()),
+                ("divisions", spec.divisions.is_some()),
+                ("pattern", spec.pattern.is_some()),
+                ("path", spec.path.is_some()),
+            ] {
+                if v {
+                    return Err(c.invalid(
+                        t,
+                        None,
+                        key,
+                        "does not apply to shape = \"disc\"".into(),
+                    ));
+                }
+            }
+            let radius = c.positive(
+                t,
+                None,
+                "radius",
+                c.required(t, None, "radius", &spec.radius, "for shape = \"disc\" (m)")?,
+            )?;
+            let rings = c.required(t, None, "rings", &spec.rings, "for shape = \"disc\"")?;
+            let p = order.unwrap_or(ElementOrder::Linear).degree();
+            if rings == 0
+                || rings.saturating_mul(rings).saturating_mul(3 * p * p) > MAX_GENERATED_NODES
+            {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    "rings",
+                    format!(
+                        "must lie in 1..={}, not {rings}",
+                        ((MAX_GENERATED_NODES / (3 * p * p)) as f64).sqrt() as usize
+                    ),
+                ));
+            }
+            generate::disc(radius, rings, center, order.unwrap_or(ElementOrder::Linear))
+        }
+        MeshShape::File => {
+            for (key, v) in [
+                ("size", spec.size.is_some()),
+                ("divisions", spec.divisions.is_some()),
+                ("pattern", spec.pattern.is_some()),
+                ("radius", spec.radius.is_some()),
+                ("rings", spec.rings.is_some()),
+                ("center", spec.center.is_some()),
+            ] {
+                if v {
+                    return Err(c.invalid(
+                        t,
+                        None,
+                        key,
+                        "does not apply to shape = \"file\"".into(),
+                    ));
+                }
+            }
+            let rel = c.required(t, None, "path", &spec.path, "for shape = \"file\"")?;
+            let path: PathBuf = base.join(&rel);
+            let mesh = read_mesh_file(&path).map_err(|message| ScenarioError::Mesh {
+                file: c.file.to_path_buf(),
+                message: format!("{}: {message}", path.display()),
+            })?;
+            if let Some(o) = order
+                && o != mesh.order
+            {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    "order",
+                    format!(
+                        "is {} but {} holds triangles of order {}",
+                        o.degree(),
+                        path.display(),
+                        mesh.order.degree()
+                    ),
+                ));
+            }
+            mesh
+        }
+    };
+    mesh.validate().map_err(|e| ScenarioError::Mesh {
+        file: c.file.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    Ok(mesh)
+}
+
+/// Reads a `.msh` or `.obj` mesh file.
+pub fn read_mesh_file(path: &Path) -> Result<Mesh, String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("msh") => crate::mesh::gmsh::read_msh(path).map_err(|e| e.to_string()),
+        Some("obj") => crate::mesh::obj::read_obj(path).map_err(|e| e.to_string()),
+        _ => Err("unknown mesh format: expected a .msh (Gmsh) or .obj file".into()),
+    }
+}
+
+fn select(
+    c: &Checker,
+    mesh: &Mesh,
+    table: &str,
+    i: usize,
+    at: Option<[f64; 3]>,
+    within: &Option<BoxSpec>,
+    boundary: Option<bool>,
+) -> Result<Vec<usize>, ScenarioError> {
+    let (lo, hi) = mesh.bounding_box();
+    let size = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt();
+    let mut nodes: Vec<usize> = (0..mesh.node_count()).collect();
+    let mut any = false;
+    if let Some(at) = at {
+        c.finite(table, Some(i), "at", &at)?;
+        nodes = vec![nearest(c, mesh, table, i, at, size)?];
+        any = true;
+    }
+    if let Some(b) = within {
+        c.finite(table, Some(i), "within", &b.min)?;
+        c.finite(table, Some(i), "within", &b.max)?;
+        let tol = 1e-9 * size;
+        nodes.retain(|&n| {
+            (0..3).all(|k| mesh.nodes[n][k] >= b.min[k] - tol && mesh.nodes[n][k] <= b.max[k] + tol)
+        });
+        any = true;
+    }
+    if boundary == Some(true) {
+        let edge = mesh.boundary_nodes();
+        nodes.retain(|n| edge.binary_search(n).is_ok());
+        any = true;
+    }
+    if !any {
+        return Err(c.invalid(
+            table,
+            Some(i),
+            "at",
+            "no node selector: give `at`, `within` or `boundary = true`".into(),
+        ));
+    }
+    if nodes.is_empty() {
+        return Err(c.invalid(
+            table,
+            Some(i),
+            if within.is_some() {
+                "within"
+            } else {
+                "boundary"
+            },
+            "selects no node".into(),
+        ));
+    }
+    Ok(nodes)
+}
+
+fn build_fix(
+    c: &Checker,
+    mesh: &Mesh,
+    i: usize,
+    f: &FixSpec,
+    fixed: &mut [bool],
+) -> Result<(), ScenarioError> {
+    let nodes = select(c, mesh, "fix", i, f.at, &f.within, f.boundary)?;
+    let components = match &f.components {
+        None => vec![0, 1, 2],
+        Some(list) if list.is_empty() => {
+            return Err(c.invalid(
+                "fix",
+                Some(i),
+                "components",
+                "must list at least one of \"x\", \"y\", \"z\"".into(),
+            ));
+        }
+        Some(list) => list
+            .iter()
+            .map(|s| match s.as_str() {
+                "x" => Ok(0),
+                "y" => Ok(1),
+                "z" => Ok(2),
+                other => Err(c.invalid(
+                    "fix",
+                    Some(i),
+                    "components",
+                    format!("must be \"x\", \"y\" or \"z\", not {other:?}"),
+                )),
+            })
+            .collect::<Result<_, _>>()?,
+    };
+    for n in nodes {
+        for &k in &components {
+            fixed[3 * n + k] = true;
+        }
+    }
+    Ok(())
+}
+
+fn build_load(c: &Checker, mesh: &Mesh, i: usize, l: &LoadSpec) -> Result<Load, ScenarioError> {
+    let t = "load";
+    let ix = Some(i);
+    if let Some(r) = l.ramp {
+        c.positive(t, ix, "ramp", r)?;
+    }
+    let no_selector = |why: &str| -> Result<(), ScenarioError> {
+        c.absent(t, ix, "at", &l.at, why)?;
+        c.absent(t, ix, "within", &l.within, why)?;
+        c.absent(t, ix, "boundary", &l.boundary, why)
+    };
+    let kind = match l.kind {
+        LoadKindSpec::Surface => {
+            no_selector("to a surface load")?;
+            c.absent(t, ix, "value", &l.value, "to a surface load (use force)")?;
+            c.absent(
+                t,
+                ix,
+                "acceleration",
+                &l.acceleration,
+                "to a surface load (use force)",
+            )?;
+            let force = c.required(t, ix, "force", &l.force, "for a surface load (N/m^2)")?;
+            c.finite(t, ix, "force", &force)?;
+            LoadKind::Surface { force }
+        }
+        LoadKindSpec::Gravity => {
+            no_selector("to gravity")?;
+            c.absent(t, ix, "value", &l.value, "to gravity")?;
+            let acceleration = match (l.force, l.acceleration) {
+                (Some(_), Some(_)) => {
+                    return Err(c.invalid(
+                        t,
+                        ix,
+                        "acceleration",
+                        "is given together with force: give one".into(),
+                    ));
+                }
+                (Some(a), None) | (None, Some(a)) => a,
+                (None, None) => {
+                    return Err(c.invalid(
+                        t,
+                        ix,
+                        "acceleration",
+                        "is required for gravity (m/s^2), e.g. [0, 0, -9.8]".into(),
+                    ));
+                }
+            };
+            c.finite(t, ix, "acceleration", &acceleration)?;
+            LoadKind::Gravity { acceleration }
+        }
+        LoadKindSpec::Pressure => {
+            no_selector("to a pressure")?;
+            c.absent(t, ix, "force", &l.force, "to a pressure (use value)")?;
+            c.absent(
+                t,
+                ix,
+                "acceleration",
+                &l.acceleration,
+                "to a pressure (use value)",
+            )?;
+            let value = c.required(t, ix, "value", &l.value, "for a pressure (Pa)")?;
+            c.finite(t, ix, "value", &[value])?;
+            LoadKind::Pressure { value }
+        }
+        LoadKindSpec::Nodal => {
+            c.absent(t, ix, "value", &l.value, "to a nodal load (use force)")?;
+            c.absent(
+                t,
+                ix,
+                "acceleration",
+                &l.acceleration,
+                "to a nodal load (use force)",
+            )?;
+            let force = c.required(t, ix, "force", &l.force, "for a nodal load (N per node)")?;
+            c.finite(t, ix, "force", &force)?;
+            let nodes = select(c, mesh, t, i, l.at, &l.within, l.boundary)?;
+            LoadKind::Nodal { nodes, force }
+        }
+    };
+    Ok(Load { kind, ramp: l.ramp })
+}

@@ -1,0 +1,442 @@
+//! The scenario file (TOML): its keys, their defaults and ranges, and the
+//! construction of a [`Setup`] (model, schedule, monitors) from it
+//! (SPEC §2).
+//!
+//! Every key is documented on its field below; the README's scenario
+//! reference is checked against these (a test lists the keys). Unknown
+//! keys, wrong types, out-of-range values and missing required keys are
+//! errors that name the file, the key and, where it can be found, the line.
+
+mod build;
+mod locate;
+
+pub use build::{Analysis, Monitor, Setup, read_mesh_file};
+
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// A scenario file that cannot be used.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ScenarioError {
+    /// The file could not be read.
+    #[error("{file}: cannot read: {source}")]
+    Io {
+        /// The scenario file.
+        file: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// TOML syntax, unknown key, wrong type or missing key.
+    #[error("{file}{}: {message}", line.map(|l| format!(", line {l}")).unwrap_or_default())]
+    Parse {
+        /// The scenario file.
+        file: PathBuf,
+        /// 1-based line, when known.
+        line: Option<usize>,
+        /// What is wrong.
+        message: String,
+    },
+    /// A value out of range or inconsistent with others.
+    #[error("{file}{}: `{key}` {message}", line.map(|l| format!(", line {l}")).unwrap_or_default())]
+    Invalid {
+        /// The scenario file.
+        file: PathBuf,
+        /// 1-based line, when known.
+        line: Option<usize>,
+        /// Dotted key path, e.g. `material.thickness` or `load[2].ramp`.
+        key: String,
+        /// What is wrong, with the value.
+        message: String,
+    },
+    /// A mesh file that cannot be read.
+    #[error("{file}: mesh: {message}")]
+    Mesh {
+        /// The scenario file.
+        file: PathBuf,
+        /// The reader's or validator's message.
+        message: String,
+    },
+}
+
+/// A whole scenario file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Free text shown in the summary. Default: the file stem.
+    pub title: Option<String>,
+    /// The membrane's reference mesh.
+    pub mesh: MeshSpec,
+    /// Material and section.
+    pub material: MaterialSpec,
+    /// Loads (`[[load]]`), any number.
+    #[serde(default, rename = "load")]
+    pub loads: Vec<LoadSpec>,
+    /// Supports (`[[fix]]`), any number.
+    #[serde(default, rename = "fix")]
+    pub fixes: Vec<FixSpec>,
+    /// Rigid obstacles (`[[obstacle]]`), any number.
+    #[serde(default, rename = "obstacle")]
+    pub obstacles: Vec<ObstacleSpec>,
+    /// Contact enforcement; required when there are obstacles.
+    pub contact: Option<ContactSpec>,
+    /// Dynamic or static analysis.
+    #[serde(default)]
+    pub analysis: AnalysisSpec,
+    /// Time integration and schedule (required for dynamic analysis).
+    pub time: Option<TimeSpec>,
+    /// Newton settings.
+    #[serde(default)]
+    pub solver: SolverSpec,
+    /// Output settings.
+    #[serde(default)]
+    pub output: OutputSpec,
+    /// Nodes whose positions go into the history (`[[monitor]]`).
+    #[serde(default, rename = "monitor")]
+    pub monitors: Vec<MonitorSpec>,
+}
+
+/// `[mesh]`: which mesh and of which order.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSpec {
+    /// `"rectangle"`, `"disc"` or `"file"`. Required.
+    pub shape: MeshShape,
+    /// Rectangle: width (x) and height (y), m, > 0.
+    pub size: Option<[f64; 2]>,
+    /// Rectangle: squares along x and y (each cut in two triangles), >= 1.
+    pub divisions: Option<[usize; 2]>,
+    /// Rectangle: diagonal pattern `"right"` (default), `"left"`, `"alternate"`.
+    pub pattern: Option<crate::mesh::generate::Pattern>,
+    /// Rectangle and disc: centre; the mesh lies in the plane `z = center[2]`. Default `[0, 0, 0]`.
+    pub center: Option<[f64; 3]>,
+    /// Lagrange order of the triangles: 1 (default), 2 or 3. For a file, the
+    /// file's order is used and this key, if given, must agree.
+    pub order: Option<usize>,
+    /// Disc: radius, m, > 0.
+    pub radius: Option<f64>,
+    /// Disc: number of rings, >= 1.
+    pub rings: Option<usize>,
+    /// File: path of a Gmsh `.msh` (2.2 or 4.1, ASCII or binary) or `.obj`,
+    /// relative to the scenario file's folder.
+    pub path: Option<PathBuf>,
+}
+
+/// Mesh shapes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MeshShape {
+    /// Structured rectangle.
+    Rectangle,
+    /// Structured disc.
+    Disc,
+    /// Read from a file.
+    File,
+}
+
+/// `[material]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// `"saint-venant-kirchhoff"` (the default and, for now, the only model).
+    #[serde(default = "default_model")]
+    pub model: String,
+    /// Young's modulus `E` (Pa), > 0. Required.
+    pub youngs_modulus: f64,
+    /// Poisson's ratio `nu`, in (-1, 0.5). Required.
+    pub poisson_ratio: f64,
+    /// Density `rho` (kg/m^3), > 0 (>= 0 in static analysis). Required.
+    pub density: f64,
+    /// Thickness `t` (m), > 0. Required.
+    pub thickness: f64,
+    /// Wrinkling model: `"none"` (default) or `"stress-projection"`.
+    #[serde(default = "default_wrinkling")]
+    pub wrinkling: String,
+    /// Isotropic in-plane prestress added to `S` (Pa), default 0.
+    #[serde(default)]
+    pub prestress: f64,
+}
+
+fn default_model() -> String {
+    "saint-venant-kirchhoff".into()
+}
+fn default_wrinkling() -> String {
+    "none".into()
+}
+
+/// Node selection shared by `[[fix]]` and nodal loads. With several
+/// selectors, a node must satisfy all of them.
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    /// Lower corner (m).
+    pub min: [f64; 3],
+    /// Upper corner (m).
+    pub max: [f64; 3],
+}
+
+/// `[[load]]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoadSpec {
+    /// `"surface"`, `"gravity"`, `"pressure"` or `"nodal"`. Required.
+    pub kind: LoadKindSpec,
+    /// Surface: force per unit initial area (N/m^2); gravity: the
+    /// acceleration (m/s^2); nodal: force per selected node (N).
+    pub force: Option<[f64; 3]>,
+    /// Gravity: the acceleration (m/s^2), an alias of `force`.
+    pub acceleration: Option<[f64; 3]>,
+    /// Pressure (Pa), along the current normal (right-hand rule over the
+    /// node order: +z for a generated flat mesh).
+    pub value: Option<f64>,
+    /// Rise time (s), > 0: the load grows linearly from 0 at `t = 0`.
+    pub ramp: Option<f64>,
+    /// Nodal: the node nearest this initial position.
+    pub at: Option<[f64; 3]>,
+    /// Nodal: every node inside this box.
+    pub within: Option<BoxSpec>,
+    /// Nodal: every node on the mesh's free edge.
+    pub boundary: Option<bool>,
+}
+
+/// Load kinds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LoadKindSpec {
+    /// Dead force per initial area.
+    Surface,
+    /// Weight `rho t g`.
+    Gravity,
+    /// Follower pressure.
+    Pressure,
+    /// Nodal forces.
+    Nodal,
+}
+
+/// `[[fix]]`: fixed position components.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FixSpec {
+    /// The node nearest this initial position (m).
+    pub at: Option<[f64; 3]>,
+    /// Every node inside this box (m).
+    pub within: Option<BoxSpec>,
+    /// Every node on the mesh's free edge (combine with `within` to take part of it).
+    pub boundary: Option<bool>,
+    /// Which components are fixed: any of `"x"`, `"y"`, `"z"`. Default: all three.
+    pub components: Option<Vec<String>>,
+}
+
+/// `[[obstacle]]`: a rigid body (contact is enforced from issue 3 on).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObstacleSpec {
+    /// `"plane"`, `"box"`, `"sphere"`, `"cylinder"` or `"mesh"`.
+    pub shape: String,
+    /// Box: lower corner (m).
+    pub min: Option<[f64; 3]>,
+    /// Box: upper corner (m).
+    pub max: Option<[f64; 3]>,
+    /// Plane: a point on it (m).
+    pub point: Option<[f64; 3]>,
+    /// Plane: outward normal.
+    pub normal: Option<[f64; 3]>,
+    /// Sphere: centre; cylinder: centre of the top face (m).
+    pub center: Option<[f64; 3]>,
+    /// Sphere, cylinder: radius (m).
+    pub radius: Option<f64>,
+    /// Cylinder: axis (towards the top face).
+    pub axis: Option<[f64; 3]>,
+    /// Cylinder: height (m).
+    pub height: Option<f64>,
+    /// Mesh: OBJ or STL file, relative to the scenario's folder.
+    pub path: Option<PathBuf>,
+    /// Rigid velocity (m/s). Default 0.
+    pub velocity: Option<[f64; 3]>,
+}
+
+/// `[contact]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// `"penalty"` or `"lagrange"`.
+    pub method: String,
+    /// Penalty stiffness `eta` (N/m per node), penalty only.
+    pub penalty: Option<f64>,
+}
+
+/// `[analysis]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnalysisSpec {
+    /// `"dynamic"` (default) or `"static"`.
+    #[serde(default = "default_kind")]
+    pub kind: AnalysisKind,
+    /// Static: number of equal load increments (>= 1, default 10).
+    pub steps: Option<usize>,
+    /// Mass matrix: `"consistent"` (default) or `"lumped"`.
+    #[serde(default = "default_mass")]
+    pub mass: crate::model::MassKind,
+}
+
+impl Default for AnalysisSpec {
+    fn default() -> Self {
+        Self {
+            kind: AnalysisKind::Dynamic,
+            steps: None,
+            mass: crate::model::MassKind::Consistent,
+        }
+    }
+}
+
+fn default_kind() -> AnalysisKind {
+    AnalysisKind::Dynamic
+}
+fn default_mass() -> crate::model::MassKind {
+    crate::model::MassKind::Consistent
+}
+
+/// Analysis kinds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AnalysisKind {
+    /// Newmark-beta dynamics.
+    Dynamic,
+    /// Load stepping to equilibrium.
+    Static,
+}
+
+/// `[time]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    /// Newmark `beta` (> 0). Default 1.0 (with `gamma = 1.5`: strongly
+    /// damped, recommended for contact; `0.25, 0.5` is the trapezoidal rule).
+    #[serde(default = "default_beta")]
+    pub beta: f64,
+    /// Newmark `gamma` (>= 0.5). Default 1.5.
+    #[serde(default = "default_gamma")]
+    pub gamma: f64,
+    /// The schedule: segments of `steps` steps of size `dt` (s). Required.
+    pub segments: Vec<SegmentSpec>,
+}
+
+fn default_beta() -> f64 {
+    1.0
+}
+fn default_gamma() -> f64 {
+    1.5
+}
+
+/// One segment of the time schedule.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SegmentSpec {
+    /// Number of steps, >= 1.
+    pub steps: usize,
+    /// Step size (s), > 0.
+    pub dt: f64,
+}
+
+/// `[solver]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSpec {
+    /// Newton tolerance on `|dY| / |X|`, in (0, 1). Default 1e-8.
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// Newton tolerance on `|G|` relative to the forces at play, in (0, 1). Default 1e-6.
+    #[serde(default = "default_residual_tolerance")]
+    pub residual_tolerance: f64,
+    /// Most Newton iterations per step, >= 1. Default 30.
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+    /// How many times a failing step may be halved, >= 0. Default 6.
+    #[serde(default = "default_max_cutbacks")]
+    pub max_cutbacks: usize,
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        Self {
+            tolerance: default_tolerance(),
+            residual_tolerance: default_residual_tolerance(),
+            max_iterations: default_max_iterations(),
+            max_cutbacks: default_max_cutbacks(),
+        }
+    }
+}
+
+fn default_tolerance() -> f64 {
+    1e-8
+}
+fn default_residual_tolerance() -> f64 {
+    1e-6
+}
+fn default_max_iterations() -> usize {
+    30
+}
+fn default_max_cutbacks() -> usize {
+    6
+}
+
+/// `[output]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Write the fields every `every` steps (>= 1, default 10); the initial
+    /// and the last step are always written.
+    #[serde(default = "default_every")]
+    pub every: usize,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self {
+            every: default_every(),
+        }
+    }
+}
+
+fn default_every() -> usize {
+    10
+}
+
+/// `[[monitor]]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MonitorSpec {
+    /// Name; columns `<name>_x, <name>_y, <name>_z` in the history. Letters,
+    /// digits, `_` and `-`; unique.
+    pub name: String,
+    /// The node nearest this initial position (m); it must lie within 10 %
+    /// of the mesh's size from it.
+    pub at: [f64; 3],
+}
+
+impl Scenario {
+    /// Reads and parses a scenario file (types and unknown keys checked;
+    /// ranges are checked by [`Scenario::build`]).
+    pub fn read(path: &Path) -> Result<(Self, String), ScenarioError> {
+        let source = std::fs::read_to_string(path).map_err(|e| ScenarioError::Io {
+            file: path.to_path_buf(),
+            source: e,
+        })?;
+        let scenario = Self::parse(&source, path)?;
+        Ok((scenario, source))
+    }
+
+    /// Parses scenario text; `path` is used in messages.
+    pub fn parse(source: &str, path: &Path) -> Result<Self, ScenarioError> {
+        toml::from_str(source).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| source[..s.start.min(source.len())].matches('\n').count() + 1);
+            ScenarioError::Parse {
+                file: path.to_path_buf(),
+                line,
+                message: e.message().trim().to_string(),
+            }
+        })
+    }
+}

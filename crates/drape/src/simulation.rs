@@ -1,0 +1,525 @@
+//! The run loop: steps through the schedule with cut-back, writes the
+//! history, the field frames and the summary (SPEC §3–4).
+//!
+//! A step whose Newton iteration fails (no convergence, divergence, NaN,
+//! singular Hessian) is retried as two steps of half the size, recursively
+//! up to `max_cutbacks` halvings; the next scheduled step takes the
+//! original size again. When even the smallest step fails, the run stops:
+//! the last converged state is written as a field frame, the history holds
+//! every converged step, and `summary.json` says `"failed"` and why.
+
+use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
+use crate::integrator::{State, StaticStepper};
+use crate::output::atomic::write_atomic;
+use crate::output::history::HistoryWriter;
+use crate::output::pvd::{PvdWriter, frame_relative_path};
+use crate::output::vtu::{DataArray, Frame, Values, write_vtu};
+use crate::scenario::{Analysis, Setup};
+use crate::solver::NewtonError;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The stretch below which Saint-Venant–Kirchhoff loses stability in
+/// uniaxial compression: the nominal stress `Y lambda (lambda^2 - 1) / 2`
+/// has its minimum at `lambda = 1/sqrt(3)`.
+pub const SVK_CRITICAL_STRETCH: f64 = 0.577_350_269_189_625_8;
+
+/// What the observer hears after each converged step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepInfo {
+    /// Converged steps so far.
+    pub step: usize,
+    /// Time (s) or load factor (static).
+    pub time: f64,
+    /// End time of the schedule (s), or 1 in statics.
+    pub end_time: f64,
+    /// Size of this step.
+    pub dt: f64,
+    /// Newton iterations of this step.
+    pub iterations: usize,
+    /// Halvings needed for this step (0 if none).
+    pub cutbacks: usize,
+    /// Kinetic energy (J).
+    pub kinetic_energy: f64,
+    /// Strain energy (J).
+    pub strain_energy: f64,
+    /// Work of the external loads since the start (J).
+    pub external_work: f64,
+}
+
+/// `summary.json`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Summary {
+    /// `"completed"` or `"failed"`.
+    pub status: String,
+    /// Human-readable outcome.
+    pub message: String,
+    /// Scenario title.
+    pub title: String,
+    /// Converged steps.
+    pub steps: usize,
+    /// Final simulated time (s), or load factor in statics.
+    pub time: f64,
+    /// Time of the first step that ended with an active contact, or null.
+    pub first_contact_time: Option<f64>,
+    /// Total Newton iterations.
+    pub newton_iterations: usize,
+    /// Steps that had to be cut back.
+    pub cutbacks: usize,
+    /// Wall-clock time of the run (s).
+    pub wall_seconds: f64,
+    /// Nodes of the mesh.
+    pub nodes: usize,
+    /// Elements of the mesh.
+    pub elements: usize,
+    /// Degrees of freedom (3 per node).
+    pub dofs: usize,
+    /// Fixed components.
+    pub fixed_dofs: usize,
+    /// Final kinetic energy (J).
+    pub kinetic_energy: f64,
+    /// Final strain energy (J).
+    pub strain_energy: f64,
+    /// Work of the external loads (J).
+    pub external_work: f64,
+    /// Final position of each monitor.
+    pub monitors: BTreeMap<String, [f64; 3]>,
+}
+
+/// A run that stopped early; everything up to the last converged step is on disk.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RunError {
+    /// Output files could not be written.
+    #[error("cannot write {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The error.
+        source: std::io::Error,
+    },
+    /// A step failed even at the smallest step size.
+    #[error(
+        "step {step} at t = {time:.6e} s (dt = {dt:.3e} s after {cutbacks} cut-backs) failed: {source}. The last converged state is in {out}"
+    )]
+    Step {
+        /// Converged steps before the failure.
+        step: usize,
+        /// Time of the last converged state (s).
+        time: f64,
+        /// Smallest step size tried (s).
+        dt: f64,
+        /// Halvings tried.
+        cutbacks: usize,
+        /// Newton's error.
+        source: NewtonError,
+        /// Output directory.
+        out: PathBuf,
+    },
+    /// Saint-Venant–Kirchhoff driven past its stability limit.
+    #[error(
+        "at t = {time:.6e} s element {element} is compressed to a stretch of {stretch:.4}, below 1/sqrt(3) = 0.5774 where Saint-Venant-Kirchhoff loses stability in compression; results past this point would be meaningless. Reduce the compression (damping: beta = 1, gamma = 1.5), or use a wrinkling model. The last state is in {out}"
+    )]
+    MaterialInstability {
+        /// Time (s).
+        time: f64,
+        /// Element index.
+        element: usize,
+        /// Smallest principal stretch.
+        stretch: f64,
+        /// Output directory.
+        out: PathBuf,
+    },
+    /// The linear solver could not even be set up.
+    #[error("{0}")]
+    Setup(String),
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
+    move |source| RunError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+struct Writer<'a> {
+    setup: &'a Setup,
+    dir: PathBuf,
+    history: HistoryWriter,
+    pvd: PvdWriter,
+    scratch: Vec<f64>,
+}
+
+/// The history's column names, in order.
+pub fn history_columns(setup: &Setup) -> Vec<String> {
+    let mut columns: Vec<String> = [
+        "step",
+        "time",
+        "dt",
+        "iterations",
+        "kinetic_energy",
+        "strain_energy",
+        "active_contacts",
+        "contact_force",
+        "min_gap",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    for m in &setup.monitors {
+        for c in ["x", "y", "z"] {
+            columns.push(format!("{}_{c}", m.name));
+        }
+    }
+    columns.extend(["external_work", "total_energy", "min_stretch", "cutbacks"].map(String::from));
+    columns
+}
+
+impl Writer<'_> {
+    fn row(
+        &mut self,
+        step: usize,
+        state: &State,
+        dt: f64,
+        iterations: usize,
+        strain: f64,
+        cutbacks: usize,
+        min_stretch: f64,
+    ) -> Result<f64, RunError> {
+        let model = &self.setup.model;
+        let kinetic = model.kinetic_energy(&state.velocities, &mut self.scratch);
+        let mut row = vec![
+            step as f64,
+            state.time,
+            dt,
+            iterations as f64,
+            kinetic,
+            strain,
+            0.0,
+            0.0,
+            f64::NAN,
+        ];
+        for m in &self.setup.monitors {
+            row.extend_from_slice(&state.positions[3 * m.node..3 * m.node + 3]);
+        }
+        row.extend_from_slice(&[
+            state.external_work,
+            kinetic + strain - state.external_work,
+            min_stretch,
+            cutbacks as f64,
+        ]);
+        let path = self.history.path().to_path_buf();
+        self.history.write_row(&row).map_err(io_err(&path))?;
+        Ok(kinetic)
+    }
+
+    fn frame(&mut self, step: usize, state: &State) -> Result<(), RunError> {
+        let model = &self.setup.model;
+        let positions: Vec<[f64; 3]> = state
+            .positions
+            .chunks(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        let displacement: Vec<f64> = state
+            .positions
+            .iter()
+            .zip(model.mesh.nodes.iter().flatten())
+            .map(|(y, x)| y - x)
+            .collect();
+        let contact = vec![0.0; state.positions.len()];
+        let results = model.element_results(&state.positions);
+        let stress: Vec<f64> = results.stress.iter().flatten().copied().collect();
+        let principal: Vec<f64> = results.principal.iter().flatten().copied().collect();
+        let wrinkle: Vec<i32> = results
+            .principal
+            .iter()
+            .map(|p| {
+                if p[1] >= 0.0 {
+                    0
+                } else if p[0] > 0.0 {
+                    1
+                } else {
+                    2
+                }
+            })
+            .collect();
+        let rel = frame_relative_path(step as u64);
+        let path = self.dir.join(&rel);
+        let frame = Frame {
+            positions: &positions,
+            connectivity: &model.mesh.connectivity,
+            nodes_per_element: model.mesh.order.nodes_per_element(),
+            point_data: vec![
+                DataArray {
+                    name: "displacement",
+                    components: 3,
+                    values: Values::F64(&displacement),
+                    component_names: &[],
+                },
+                DataArray {
+                    name: "velocity",
+                    components: 3,
+                    values: Values::F64(&state.velocities),
+                    component_names: &[],
+                },
+                DataArray {
+                    name: "contact_force",
+                    components: 3,
+                    values: Values::F64(&contact),
+                    component_names: &[],
+                },
+            ],
+            cell_data: vec![
+                DataArray {
+                    name: "stress",
+                    components: 3,
+                    values: Values::F64(&stress),
+                    component_names: &["xx", "yy", "xy"],
+                },
+                DataArray {
+                    name: "principal_stress",
+                    components: 2,
+                    values: Values::F64(&principal),
+                    component_names: &["max", "min"],
+                },
+                DataArray {
+                    name: "wrinkle_state",
+                    components: 1,
+                    values: Values::I32(&wrinkle),
+                    component_names: &[],
+                },
+            ],
+            time: state.time,
+        };
+        write_vtu(&path, &frame).map_err(io_err(&path))?;
+        let pvd_path = self.pvd.path().to_path_buf();
+        self.pvd.push(state.time, &rel).map_err(io_err(&pvd_path))
+    }
+}
+
+/// Runs a scenario into `out`, calling `observer` after each converged
+/// step. Writes `summary.json` in every case; returns it on success.
+pub fn run(
+    setup: &Setup,
+    out: &Path,
+    observer: &mut dyn FnMut(&StepInfo),
+) -> Result<Summary, RunError> {
+    let start = Instant::now();
+    std::fs::create_dir_all(out.join("fields")).map_err(io_err(out))?;
+    let model = &setup.model;
+    let history_path = out.join("history.csv");
+    let mut writer = Writer {
+        setup,
+        dir: out.to_path_buf(),
+        history: HistoryWriter::create(&history_path, &history_columns(setup))
+            .map_err(io_err(&history_path))?,
+        pvd: PvdWriter::new(out.join("fields.pvd")),
+        scratch: vec![0.0; model.dofs()],
+    };
+    let mut ws = DynamicWorkspace::new(model).map_err(|e| RunError::Setup(e.to_string()))?;
+    let x = model.initial_positions();
+    let length = reference_length(&x);
+    let (mut state, schedule, end_time): (State, Vec<(usize, f64)>, f64) = match &setup.analysis {
+        Analysis::Dynamic { newmark, segments } => {
+            let s = newmark
+                .initial_state(model, &mut ws)
+                .map_err(|e| RunError::Setup(e.to_string()))?;
+            let end = segments.iter().map(|(n, dt)| *n as f64 * dt).sum();
+            (s, segments.clone(), end)
+        }
+        Analysis::Static { steps } => {
+            let n = x.len();
+            ws.f_ext.fill(0.0);
+            (
+                State {
+                    time: 0.0,
+                    positions: x.clone(),
+                    velocities: vec![0.0; n],
+                    accelerations: vec![0.0; n],
+                    external_work: 0.0,
+                },
+                vec![(*steps, 1.0 / *steps as f64)],
+                1.0,
+            )
+        }
+    };
+    let strain0 = model.strain_energy(&state.positions);
+    writer.row(
+        0,
+        &state,
+        0.0,
+        0,
+        strain0,
+        0,
+        model.min_stretch(&state.positions).0,
+    )?;
+    writer.frame(0, &state)?;
+
+    let mut step = 0usize;
+    let mut iterations = 0usize;
+    let mut cutback_steps = 0usize;
+    let mut last_strain = strain0;
+    let mut since_frame = 0usize;
+    let mut failure: Option<RunError> = None;
+    let mut last_written = 0usize;
+    'schedule: for (count, dt) in &schedule {
+        for _ in 0..*count {
+            // Each scheduled step may be split into 2^k sub-steps.
+            let mut pending: Vec<(f64, usize)> = vec![(*dt, 0)];
+            while let Some((h, depth)) = pending.pop() {
+                let result = advance(setup, &mut state, h, length, &mut ws);
+                match result {
+                    Ok(outcome) => {
+                        step += 1;
+                        iterations += outcome.newton.iterations;
+                        if depth > 0 {
+                            cutback_steps += 1;
+                        }
+                        last_strain = outcome.strain_energy;
+                        let (stretch, element) = model.min_stretch(&state.positions);
+                        let kinetic = writer.row(
+                            step,
+                            &state,
+                            h,
+                            outcome.newton.iterations,
+                            outcome.strain_energy,
+                            depth,
+                            stretch,
+                        )?;
+                        observer(&StepInfo {
+                            step,
+                            time: state.time,
+                            end_time,
+                            dt: h,
+                            iterations: outcome.newton.iterations,
+                            cutbacks: depth,
+                            kinetic_energy: kinetic,
+                            strain_energy: outcome.strain_energy,
+                            external_work: state.external_work,
+                        });
+                        since_frame += 1;
+                        if since_frame >= setup.output_every {
+                            writer.frame(step, &state)?;
+                            last_written = step;
+                            since_frame = 0;
+                        }
+                        if stretch < SVK_CRITICAL_STRETCH {
+                            failure = Some(RunError::MaterialInstability {
+                                time: state.time,
+                                element,
+                                stretch,
+                                out: out.to_path_buf(),
+                            });
+                            break 'schedule;
+                        }
+                    }
+                    Err(e) if depth < setup.max_cutbacks => {
+                        let _ = e;
+                        pending.push((0.5 * h, depth + 1));
+                        pending.push((0.5 * h, depth + 1));
+                    }
+                    Err(e) => {
+                        failure = Some(RunError::Step {
+                            step,
+                            time: state.time,
+                            dt: h,
+                            cutbacks: depth,
+                            source: e,
+                            out: out.to_path_buf(),
+                        });
+                        break 'schedule;
+                    }
+                }
+            }
+        }
+    }
+    if last_written != step {
+        writer.frame(step, &state)?;
+    }
+    let kinetic = model.kinetic_energy(&state.velocities, &mut writer.scratch);
+    let summary = Summary {
+        status: if failure.is_some() {
+            "failed"
+        } else {
+            "completed"
+        }
+        .into(),
+        message: match &failure {
+            Some(e) => e.to_string(),
+            None => format!("completed {step} steps to t = {:.6} s", state.time),
+        },
+        title: setup.title.clone(),
+        steps: step,
+        time: state.time,
+        first_contact_time: None,
+        newton_iterations: iterations,
+        cutbacks: cutback_steps,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        nodes: model.mesh.node_count(),
+        elements: model.mesh.element_count(),
+        dofs: model.dofs(),
+        fixed_dofs: model.fixed_count(),
+        kinetic_energy: kinetic,
+        strain_energy: last_strain,
+        external_work: state.external_work,
+        monitors: setup
+            .monitors
+            .iter()
+            .map(|m| {
+                (
+                    m.name.clone(),
+                    [
+                        state.positions[3 * m.node],
+                        state.positions[3 * m.node + 1],
+                        state.positions[3 * m.node + 2],
+                    ],
+                )
+            })
+            .collect(),
+    };
+    let summary_path = out.join("summary.json");
+    let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
+    write_atomic(&summary_path, json.as_bytes()).map_err(io_err(&summary_path))?;
+    match failure {
+        Some(e) => Err(e),
+        None => Ok(summary),
+    }
+}
+
+fn advance(
+    setup: &Setup,
+    state: &mut State,
+    h: f64,
+    length: f64,
+    ws: &mut DynamicWorkspace,
+) -> Result<StepOutcome, NewtonError> {
+    match &setup.analysis {
+        Analysis::Dynamic { newmark, .. } => {
+            newmark.step(&setup.model, state, h, &setup.newton, length, ws)
+        }
+        Analysis::Static { steps } => {
+            StaticStepper { steps: *steps }.step(&setup.model, state, h, &setup.newton, length, ws)
+        }
+    }
+}
+
+/// `|X|` of the Newton test: the Euclidean norm of the initial positions
+/// measured from their centroid (see [`crate::solver::newton`]); 1 m for a
+/// single point.
+pub fn reference_length(x: &[f64]) -> f64 {
+    let n = (x.len() / 3).max(1) as f64;
+    let mut c = [0.0; 3];
+    for p in x.chunks(3) {
+        for i in 0..3 {
+            c[i] += p[i] / n;
+        }
+    }
+    let l = x
+        .chunks(3)
+        .map(|p| (0..3).map(|i| (p[i] - c[i]).powi(2)).sum::<f64>())
+        .sum::<f64>()
+        .sqrt();
+    if l > 0.0 { l } else { 1.0 }
+}
