@@ -1,0 +1,231 @@
+//! Mass, free fall, energy behaviour of Newmark, and the assembled Hessian.
+
+mod common;
+
+use common::{column, fabric, read_history, setup, temp_dir};
+use drape::element::membrane::Section;
+use drape::fd::jacobian_error;
+use drape::integrator::Newmark;
+use drape::integrator::newmark::DynamicWorkspace;
+use drape::load::{Load, LoadKind};
+use drape::material::SaintVenantKirchhoff;
+use drape::mesh::generate::{Pattern, rectangle};
+use drape::mesh::{ElementOrder, Mesh};
+use drape::model::{MassKind, Model};
+use drape::simulation::{reference_length, run};
+use drape::solver::NewtonSettings;
+
+fn model(mesh: Mesh, loads: Vec<Load>, fixed: Vec<bool>, mass: MassKind) -> Model {
+    Model::new(
+        mesh,
+        Box::new(SaintVenantKirchhoff::new(2.0e6, 0.3)),
+        Section {
+            thickness: 6e-4,
+            prestress: 0.0,
+        },
+        320.0,
+        loads,
+        fixed,
+        mass,
+    )
+    .unwrap()
+}
+
+/// Consistent T3 mass: `rho t A / 12 [[2, 1, 1], [1, 2, 1], [1, 1, 2]]`
+/// (each block times I3); lumped: `rho t A / 3` on the diagonal.
+#[test]
+fn t3_mass_matrices_match_the_closed_form() {
+    let mesh = Mesh {
+        nodes: vec![[0.0, 0.0, 0.0], [0.3, 0.1, 0.05], [0.05, 0.2, -0.02]],
+        order: ElementOrder::Linear,
+        connectivity: vec![0, 1, 2],
+    };
+    let area: f64 = {
+        let (u, v): ([f64; 3], [f64; 3]) = ([0.3, 0.1, 0.05], [0.05, 0.2, -0.02]);
+        let c = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+    };
+    let rho_t = 320.0 * 6e-4;
+    for kind in [MassKind::Consistent, MassKind::Lumped] {
+        let m = model(mesh.clone(), vec![], vec![], kind);
+        for b in 0..3 {
+            for j in 0..3 {
+                let mut e = vec![0.0; 9];
+                e[3 * b + j] = 1.0;
+                let mut col = vec![0.0; 9];
+                m.mass_times(&e, &mut col);
+                for a in 0..3 {
+                    for i in 0..3 {
+                        let expected = match kind {
+                            MassKind::Consistent if i == j => {
+                                rho_t * area / 12.0 * if a == b { 2.0 } else { 1.0 }
+                            }
+                            MassKind::Lumped if i == j && a == b => rho_t * area / 3.0,
+                            _ => 0.0,
+                        };
+                        assert!(
+                            (col[3 * a + i] - expected).abs() < 1e-15,
+                            "{kind:?} ({a},{i}),({b},{j})"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A free membrane under a uniform load falls exactly as `z = -g t^2 / 2`,
+/// `v = -g t`, for any Newmark parameters, when `A_0 = M^-1 (F_ext - F_int)`
+/// (consistent mass and consistent loads give a uniform `A_0 = -g`).
+#[test]
+fn free_fall_is_exact_for_any_newmark_parameters() {
+    let q = 1.8816;
+    let g = q / (320.0 * 6e-4);
+    for order in [
+        ElementOrder::Linear,
+        ElementOrder::Quadratic,
+        ElementOrder::Cubic,
+    ] {
+        for (beta, gamma) in [(0.25, 0.5), (1.0, 1.5), (0.3025, 0.6), (0.5, 0.5)] {
+            let mesh = rectangle([0.2, 0.2], [4, 4], Pattern::Alternate, [0.0; 3], order);
+            let m = model(
+                mesh,
+                vec![Load {
+                    kind: LoadKind::Surface {
+                        force: [0.0, 0.0, -q],
+                    },
+                    ramp: None,
+                }],
+                vec![],
+                MassKind::Consistent,
+            );
+            let newmark = Newmark { beta, gamma };
+            let mut ws = DynamicWorkspace::new(&m).unwrap();
+            let mut state = newmark.initial_state(&m, &mut ws).unwrap();
+            let length = reference_length(&m.initial_positions());
+            let dt = 0.01;
+            for _ in 0..10 {
+                newmark
+                    .step(
+                        &m,
+                        &mut state,
+                        dt,
+                        &NewtonSettings::default(),
+                        length,
+                        &mut ws,
+                    )
+                    .unwrap();
+            }
+            let t = state.time;
+            for (i, x) in m.mesh.nodes.iter().enumerate() {
+                let z = state.positions[3 * i + 2];
+                assert!(
+                    (z - (x[2] - 0.5 * g * t * t)).abs() < 1e-13,
+                    "{order:?} beta {beta}: z {z}"
+                );
+                assert!((state.velocities[3 * i + 2] + g * t).abs() < 1e-12);
+                assert!((state.positions[3 * i] - x[0]).abs() < 1e-14);
+            }
+        }
+    }
+}
+
+/// The assembled Hessian (internal forces, follower pressure, on the
+/// sparse pattern through the scatter map) equals the derivative of the
+/// assembled residual `F_int - F_p`.
+#[test]
+fn assembled_hessian_matches_finite_differences_of_the_residual() {
+    for order in [ElementOrder::Linear, ElementOrder::Quadratic] {
+        let mesh = rectangle([0.2, 0.1], [3, 2], Pattern::Alternate, [0.0; 3], order);
+        let n = 3 * mesh.node_count();
+        let m = model(
+            mesh,
+            vec![Load {
+                kind: LoadKind::Pressure { value: 40.0 },
+                ramp: None,
+            }],
+            vec![],
+            MassKind::Consistent,
+        );
+        let y0: Vec<f64> = m
+            .initial_positions()
+            .iter()
+            .enumerate()
+            .map(|(i, x)| 1.1 * x + 0.01 * ((i * 7) as f64).sin())
+            .collect();
+        let residual = |y: &[f64]| {
+            let (mut fi, mut fe) = (vec![0.0; n], vec![0.0; n]);
+            m.assemble(y, 40.0, &mut fi, &mut fe, None);
+            fi.iter().zip(&fe).map(|(a, b)| a - b).collect::<Vec<f64>>()
+        };
+        let dense = |y: &[f64]| {
+            let (mut fi, mut fe) = (vec![0.0; n], vec![0.0; n]);
+            let mut h = vec![0.0; m.pattern.nnz()];
+            m.assemble(y, 40.0, &mut fi, &mut fe, Some(&mut h));
+            let mut d = vec![0.0; n * n];
+            for c in 0..n {
+                for k in m.pattern.col_ptr[c]..m.pattern.col_ptr[c + 1] {
+                    d[m.pattern.row_idx[k] * n + c] = h[k];
+                }
+            }
+            d
+        };
+        let e = jacobian_error(residual, dense, &y0, 1e-7);
+        assert!(e < 1e-6, "{order:?}: {e:e}");
+    }
+}
+
+/// Hanging cloth (the example): trapezoidal rule over the first 0.25 s
+/// keeps the total energy `K + U - W` within 1 % of the work done by the
+/// weight (the trapezoidal rule conserves energy exactly only for linear
+/// problems; for this geometrically nonlinear one the error is O(dt^2)),
+/// while `beta = 1, gamma = 1.5` dissipates it at every step.
+#[test]
+fn hanging_cloth_energy_trapezoidal_conserves_damped_decays() {
+    let pins = r#"
+[[load]]
+kind = "surface"
+force = [0.0, 0.0, -1.8816]
+[[fix]]
+at = [-0.1, 0.1, 0.0]
+[[fix]]
+at = [0.1, 0.1, 0.0]
+[output]
+every = 1000
+"#;
+    for (beta, gamma, steps) in [(0.25, 0.5, 250), (1.0, 1.5, 250)] {
+        let text = fabric(&format!(
+            "{pins}\n[time]\nbeta = {beta}\ngamma = {gamma}\nsegments = [{{ steps = {steps}, dt = 1.0e-3 }}]\n"
+        ));
+        let s = setup(&text);
+        let dir = temp_dir(&format!("hanging-{beta}"));
+        run(&s, &dir, &mut |_| {}).unwrap();
+        let (h, rows) = read_history(&dir);
+        let total = column(&h, &rows, "total_energy");
+        let work = column(&h, &rows, "external_work");
+        let w_max = work.iter().fold(0.0f64, |a, w| a.max(w.abs()));
+        if beta == 0.25 {
+            let drift = total.iter().fold(0.0f64, |a, e| a.max(e.abs()));
+            eprintln!("trapezoidal: max |K + U - W| = {drift:e} J, W = {w_max:e} J");
+            assert!(
+                drift < 0.01 * w_max,
+                "drift {drift:e} J vs work {w_max:e} J"
+            );
+        } else {
+            for k in 1..total.len() {
+                // Round-off allowance: 1e-12 of the work.
+                assert!(
+                    total[k] <= total[k - 1] + 1e-12 * w_max,
+                    "energy rose at step {k}: {} -> {}",
+                    total[k - 1],
+                    total[k]
+                );
+            }
+            assert!(total.last().unwrap() < &(-0.01 * w_max));
+        }
+    }
+}
