@@ -93,16 +93,16 @@ pub struct Summary {
 #[non_exhaustive]
 pub enum RunError {
     /// Output files could not be written.
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {path}: {error}")]
     Io {
         /// The file.
         path: PathBuf,
         /// The error.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A step failed even at the smallest step size.
     #[error(
-        "step {step} at t = {time:.6e} s (dt = {dt:.3e} s after {cutbacks} cut-backs) failed: {source}. The last converged state is in {out}"
+        "step {} from t = {time:.6e} s failed at dt = {dt:.3e} s after {cutbacks} cut-backs: {cause}{hint}. The last converged state is in {out}", step + 1
     )]
     Step {
         /// Converged steps before the failure.
@@ -114,7 +114,9 @@ pub enum RunError {
         /// Halvings tried.
         cutbacks: usize,
         /// Newton's error.
-        source: NewtonError,
+        cause: NewtonError,
+        /// Advice, if any (starts with "; ").
+        hint: String,
         /// Output directory.
         out: PathBuf,
     },
@@ -138,9 +140,9 @@ pub enum RunError {
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
-    move |source| RunError::Io {
+    move |error| RunError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     }
 }
 
@@ -426,7 +428,12 @@ pub fn run(
                             time: state.time,
                             dt: h,
                             cutbacks: depth,
-                            source: e,
+                            cause: e,
+                            hint: if matches!(setup.analysis, Analysis::Static { .. }) {
+                                "; a static analysis needs a membrane in tension from the first increment on (prestress, or supports that stretch it): a slack membrane has no stiffness across its plane, so run it dynamically to rest instead (beta = 1, gamma = 1.5)".into()
+                            } else {
+                                String::new()
+                            },
                             out: out.to_path_buf(),
                         });
                         break 'schedule;

@@ -126,6 +126,10 @@ impl LinearSolver {
             self.solve_lu(values)?;
             Factorization::Lu
         };
+        // A (numerically) singular matrix can factorise without error and
+        // return garbage: check the solution's residual, `O(nnz)`.
+        let b_norm = rhs.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let residual = self.residual_norm(values, rhs);
         for (i, x) in rhs.iter_mut().enumerate().take(n) {
             *x = self.rhs[(i, 0)];
         }
@@ -134,7 +138,33 @@ impl LinearSolver {
                 detail: "the solution is not finite".into(),
             });
         }
+        if !(residual <= 1e-6 * b_norm) {
+            return Err(LinearSolveError::Singular {
+                detail: format!(
+                    "the {} solve leaves a relative residual of {:.1e}",
+                    match used {
+                        Factorization::Cholesky => "Cholesky",
+                        Factorization::Lu => "LU",
+                    },
+                    residual / b_norm
+                ),
+            });
+        }
         Ok(used)
+    }
+
+    /// `|A x - b|` with `x` in `self.rhs` and `b` in `rhs`.
+    fn residual_norm(&self, values: &[f64], b: &[f64]) -> f64 {
+        let mut r = b.to_vec();
+        let col_ptr = self.symbolic.col_ptr();
+        let row_idx = self.symbolic.row_idx();
+        for c in 0..self.dimension() {
+            let x = self.rhs[(c, 0)];
+            for k in col_ptr[c]..col_ptr[c + 1] {
+                r[row_idx[k]] -= values[k] * x;
+            }
+        }
+        r.iter().map(|v| v * v).sum::<f64>().sqrt()
     }
 
     /// Returns `Ok(false)` when the matrix is not positive definite.

@@ -144,7 +144,7 @@ pub fn solve(
         increments: Vec::new(),
         factorization: None,
     };
-    let mut first_residual = None;
+    let mut first: Option<(f64, f64)> = None;
     let mut increment = f64::INFINITY;
     loop {
         let it = report.iterations;
@@ -157,7 +157,7 @@ pub fn solve(
         if !residual.is_finite() {
             return Err(NewtonError::NonFinite { iteration: it });
         }
-        let r0 = *first_residual.get_or_insert(residual);
+        let (r0, scale0) = *first.get_or_insert((residual, eval.scale));
         let small = residual <= settings.residual_tolerance * eval.scale;
         if (it > 0 && increment <= settings.tolerance && small)
             || residual <= 1e-13 * eval.scale
@@ -165,7 +165,7 @@ pub fn solve(
         {
             return Ok(report);
         }
-        if residual > 1e8 * r0.max(eval.scale) && it > 0 {
+        if residual > 1e8 * r0.max(scale0) && it > 0 {
             return Err(NewtonError::Diverged {
                 iteration: it,
                 residual,
