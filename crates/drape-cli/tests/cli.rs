@@ -806,6 +806,44 @@ fn meshio_available() -> bool {
     ok
 }
 
+/// A small cubic (10-node triangle) scenario: no example uses order 3.
+const CUBIC_SCENARIO: &str = r#"title = "cubic triangles"
+[mesh]
+shape = "rectangle"
+size = [0.2, 0.2]
+divisions = [3, 3]
+order = 3
+[material]
+youngs_modulus = 2.0e6
+poisson_ratio = 0.3
+density = 320.0
+thickness = 0.6e-3
+[[load]]
+kind = "surface"
+force = [0.0, 0.0, -1.8816]
+[[fix]]
+at = [-0.1, 0.1, 0.0]
+[[fix]]
+at = [0.1, 0.1, 0.0]
+[time]
+segments = [{ steps = 2, dt = 1.0e-3 }]
+"#;
+
+/// The `order = N` of a scenario's `[mesh]` table (textual; default 1).
+fn mesh_order(text: &str) -> usize {
+    let mut in_mesh = false;
+    for line in text.lines() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.starts_with('[') {
+            in_mesh = line == "[mesh]";
+        } else if in_mesh && line.starts_with("order") {
+            let value = line.split_once('=').expect("order = N").1.trim();
+            return value.parse().expect("integer order");
+        }
+    }
+    1
+}
+
 #[test]
 fn vtu_frames_of_every_example_read_back_with_meshio() {
     if !meshio_available() {
@@ -813,7 +851,14 @@ fn vtu_frames_of_every_example_read_back_with_meshio() {
     }
     let script = repo_root().join("scripts/check_vtu.py");
     let tmp = TempDir::new("vtu-meshio");
-    for (name, scenario, _) in short_examples(tmp.path(), 2) {
+    let mut scenarios: Vec<(String, PathBuf)> = short_examples(tmp.path(), 2)
+        .into_iter()
+        .map(|(name, path, _)| (name, path))
+        .collect();
+    let cubic = tmp.path().join("cubic.toml");
+    std::fs::write(&cubic, CUBIC_SCENARIO).unwrap();
+    scenarios.push(("cubic".into(), cubic));
+    for (name, scenario) in scenarios {
         let out = tmp.path().join(format!("out-{name}"));
         let o = run_scenario(tmp.path(), &scenario, &out);
         assert_eq!(o.status.code(), Some(0), "{}", describe(&name, &o));
@@ -822,10 +867,29 @@ fn vtu_frames_of_every_example_read_back_with_meshio() {
             .arg(&out)
             .output()
             .expect("run python3");
-        assert!(
-            o.status.success(),
+        let what = format!("check_vtu.py on {name}");
+        assert!(o.status.success(), "{}", describe(&what, &o));
+        // The VTK cell type matches the mesh's order (SPEC §4).
+        let order = mesh_order(&std::fs::read_to_string(&scenario).unwrap());
+        let cell = match order {
+            1 => "triangle",
+            2 => "triangle6",
+            3 => "VTK_LAGRANGE_TRIANGLE",
+            p => panic!("{name}: order {p}"),
+        };
+        let frames = check_pvd(&out).len();
+        let matching = stdout(&o)
+            .lines()
+            .filter(|l| l.starts_with("ok ") && l.ends_with(&format!(" {cell} cells")))
+            .count();
+        assert_eq!(
+            matching,
+            frames,
             "{}",
-            describe(&format!("check_vtu.py on {name}"), &o)
+            describe(
+                &format!("{what}: expected {cell} cells (order {order})"),
+                &o
+            )
         );
     }
 }
