@@ -21,7 +21,13 @@ use drape::solver::LinearSolver;
 use std::hint::black_box;
 
 fn fabric(n: usize) -> (Model, Vec<f64>) {
-    let mesh = rectangle([0.2, 0.2], [n, n], Pattern::Right, [0.0; 3], ElementOrder::Linear);
+    let mesh = rectangle(
+        [0.2, 0.2],
+        [n, n],
+        Pattern::Right,
+        [0.0; 3],
+        ElementOrder::Linear,
+    );
     let mut fixed = vec![false; 3 * mesh.node_count()];
     for corner in [[-0.1, 0.1, 0.0], [0.1, 0.1, 0.0]] {
         let (node, _) = mesh.nearest_node(corner).unwrap();
@@ -30,9 +36,17 @@ fn fabric(n: usize) -> (Model, Vec<f64>) {
     let model = Model::new(
         mesh,
         Box::new(SaintVenantKirchhoff::new(2.0e6, 0.3)),
-        Section { thickness: 6e-4, prestress: 0.0 },
+        Section {
+            thickness: 6e-4,
+            prestress: 0.0,
+        },
         320.0,
-        vec![Load { kind: LoadKind::Surface { force: [0.0, 0.0, -1.8816] }, ramp: None }],
+        vec![Load {
+            kind: LoadKind::Surface {
+                force: [0.0, 0.0, -1.8816],
+            },
+            ramp: None,
+        }],
         fixed,
         MassKind::Consistent,
     )
@@ -71,16 +85,20 @@ fn benches(c: &mut Criterion) {
         let mut h = vec![0.0; model.pattern.nnz()];
         let mut linear = LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx).unwrap();
         let c_mass = 1.0 / (1.0 * 1e-3 * 1e-3);
-        group.bench_with_input(BenchmarkId::new("assemble+factorise+solve", n), &n, |b, _| {
-            b.iter(|| {
-                model.assemble(&y, 0.0, &mut fi, &mut fe, Some(&mut h));
-                model.add_mass_to_hessian(c_mass, &mut h);
-                let mut g: Vec<f64> = fi.iter().zip(&fe).map(|(a, b)| b - a).collect();
-                model.apply_supports(&mut g, Some(&mut h));
-                linear.solve(&h, true, &mut g).unwrap();
-                black_box(g[0])
-            })
-        });
+        group.bench_with_input(
+            BenchmarkId::new("assemble+factorise+solve", n),
+            &n,
+            |b, _| {
+                b.iter(|| {
+                    model.assemble(&y, 0.0, &mut fi, &mut fe, Some(&mut h));
+                    model.add_mass_to_hessian(c_mass, &mut h);
+                    let mut g: Vec<f64> = fi.iter().zip(&fe).map(|(a, b)| b - a).collect();
+                    model.apply_supports(&mut g, Some(&mut h));
+                    linear.solve(&h, true, &mut g).unwrap();
+                    black_box(g[0])
+                })
+            },
+        );
     }
     group.finish();
 }

@@ -109,7 +109,11 @@ fn check(path: &Path) -> Result<(), Failure> {
         m.dofs(),
         m.fixed_count()
     );
-    println!("  mass      {:.6e} kg ({:?})", m.total_mass(), m.mass_kind);
+    let mass_kind = match m.mass_kind {
+        drape::model::MassKind::Consistent => "consistent",
+        drape::model::MassKind::Lumped => "lumped",
+    };
+    println!("  mass      {:.6e} kg ({mass_kind})", m.total_mass());
     println!("  loads     {}", m.loads.len());
     match &setup.analysis {
         drape::scenario::Analysis::Dynamic { newmark, segments } => {

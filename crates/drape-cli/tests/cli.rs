@@ -640,8 +640,7 @@ const BAD_INPUTS: &[BadInput] = &[
     },
     BadInput {
         file: "wrong_type.toml",
-        // TODO(lead): should also name the key `material.thickness` (see report).
-        fragments: &["invalid type", "\"thin\"", "f64"],
+        fragments: &["`material.thickness`", "invalid type", "\"thin\"", "f64"],
         line: Some(13),
     },
     BadInput {
@@ -692,14 +691,17 @@ const BAD_INPUTS: &[BadInput] = &[
     },
     BadInput {
         file: "degenerate_mesh.toml",
-        // TODO(lead): should also name degenerate.msh (see report).
-        fragments: &["element 1 is degenerate"],
-        line: None,
+        fragments: &[
+            "`mesh.path`",
+            "degenerate.msh",
+            "element 1 (0-based",
+            "is degenerate",
+        ],
+        line: Some(6),
     },
     BadInput {
         file: "unknown_shape.toml",
-        // TODO(lead): should also name the key `mesh.shape` (see report).
-        fragments: &["`hexagon`", "rectangle", "disc", "file"],
+        fragments: &["`mesh.shape`", "`hexagon`", "rectangle", "disc", "file"],
         line: Some(5),
     },
 ];

@@ -309,25 +309,25 @@ pub fn run(
     observer: &mut dyn FnMut(&StepInfo),
 ) -> Result<Summary, RunError> {
     let start = Instant::now();
-    std::fs::create_dir_all(out.join("fields")).map_err(io_err(out))?;
     let model = &setup.model;
-    let history_path = out.join("history.csv");
-    let mut writer = Writer {
-        setup,
-        dir: out.to_path_buf(),
-        history: HistoryWriter::create(&history_path, &history_columns(setup))
-            .map_err(io_err(&history_path))?,
-        pvd: PvdWriter::new(out.join("fields.pvd")),
-        scratch: vec![0.0; model.dofs()],
+    std::fs::create_dir_all(out.join("fields")).map_err(io_err(out))?;
+    let mut ws = match DynamicWorkspace::new(model) {
+        Ok(ws) => ws,
+        Err(e) => return Err(setup_failure(setup, out, start, e.to_string())),
     };
-    let mut ws = DynamicWorkspace::new(model).map_err(|e| RunError::Setup(e.to_string()))?;
     let x = model.initial_positions();
     let length = reference_length(&x);
     let (mut state, schedule, end_time): (State, Vec<(usize, f64)>, f64) = match &setup.analysis {
         Analysis::Dynamic { newmark, segments } => {
-            let s = newmark
-                .initial_state(model, &mut ws)
-                .map_err(|e| RunError::Setup(e.to_string()))?;
+            let s = match newmark.initial_state(model, &mut ws) {
+                Ok(s) => s,
+                Err(e) => {
+                    let message = format!(
+                        "the initial acceleration M^-1 (F_ext - F_int) cannot be computed: {e}"
+                    );
+                    return Err(setup_failure(setup, out, start, message));
+                }
+            };
             let end = segments.iter().map(|(n, dt)| *n as f64 * dt).sum();
             (s, segments.clone(), end)
         }
@@ -346,6 +346,15 @@ pub fn run(
                 1.0,
             )
         }
+    };
+    let history_path = out.join("history.csv");
+    let mut writer = Writer {
+        setup,
+        dir: out.to_path_buf(),
+        history: HistoryWriter::create(&history_path, &history_columns(setup))
+            .map_err(io_err(&history_path))?,
+        pvd: PvdWriter::new(out.join("fields.pvd")),
+        scratch: vec![0.0; model.dofs()],
     };
     let strain0 = model.strain_energy(&state.positions);
     writer.row(
@@ -446,52 +455,102 @@ pub fn run(
         writer.frame(step, &state)?;
     }
     let kinetic = model.kinetic_energy(&state.velocities, &mut writer.scratch);
-    let summary = Summary {
+    let summary = summary(
+        setup,
+        &state,
+        failure.as_ref().map(ToString::to_string),
+        step,
+        iterations,
+        cutback_steps,
+        start,
+        kinetic,
+        last_strain,
+    );
+    write_summary(out, &summary)?;
+    match failure {
+        Some(e) => Err(e),
+        None => Ok(summary),
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn summary(
+    setup: &Setup,
+    state: &State,
+    failure: Option<String>,
+    steps: usize,
+    iterations: usize,
+    cutbacks: usize,
+    start: Instant,
+    kinetic: f64,
+    strain: f64,
+) -> Summary {
+    let model = &setup.model;
+    Summary {
         status: if failure.is_some() {
             "failed"
         } else {
             "completed"
         }
         .into(),
-        message: match &failure {
-            Some(e) => e.to_string(),
-            None => format!("completed {step} steps to t = {:.6} s", state.time),
-        },
+        message: failure
+            .unwrap_or_else(|| format!("completed {steps} steps to t = {:.6} s", state.time)),
         title: setup.title.clone(),
-        steps: step,
+        steps,
         time: state.time,
         first_contact_time: None,
         newton_iterations: iterations,
-        cutbacks: cutback_steps,
+        cutbacks,
         wall_seconds: start.elapsed().as_secs_f64(),
         nodes: model.mesh.node_count(),
         elements: model.mesh.element_count(),
         dofs: model.dofs(),
         fixed_dofs: model.fixed_count(),
         kinetic_energy: kinetic,
-        strain_energy: last_strain,
+        strain_energy: strain,
         external_work: state.external_work,
         monitors: setup
             .monitors
             .iter()
             .map(|m| {
-                (
-                    m.name.clone(),
-                    [
-                        state.positions[3 * m.node],
-                        state.positions[3 * m.node + 1],
-                        state.positions[3 * m.node + 2],
-                    ],
-                )
+                let p = &state.positions[3 * m.node..3 * m.node + 3];
+                (m.name.clone(), [p[0], p[1], p[2]])
             })
             .collect(),
+    }
+}
+
+fn write_summary(out: &Path, summary: &Summary) -> Result<(), RunError> {
+    let path = out.join("summary.json");
+    let json = serde_json::to_string_pretty(summary).unwrap_or_default();
+    write_atomic(&path, json.as_bytes()).map_err(io_err(&path))
+}
+
+/// Writes a failed summary for a run that could not start, and returns the error.
+fn setup_failure(setup: &Setup, out: &Path, start: Instant, message: String) -> RunError {
+    let x = setup.model.initial_positions();
+    let n = x.len();
+    let state = State {
+        time: 0.0,
+        positions: x,
+        velocities: vec![0.0; n],
+        accelerations: vec![0.0; n],
+        external_work: 0.0,
     };
-    let summary_path = out.join("summary.json");
-    let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
-    write_atomic(&summary_path, json.as_bytes()).map_err(io_err(&summary_path))?;
-    match failure {
-        Some(e) => Err(e),
-        None => Ok(summary),
+    let summary = summary(
+        setup,
+        &state,
+        Some(message.clone()),
+        0,
+        0,
+        0,
+        start,
+        0.0,
+        0.0,
+    );
+    match write_summary(out, &summary) {
+        Ok(()) => RunError::Setup(message),
+        Err(e) => e,
     }
 }
 

@@ -9,8 +9,15 @@ fn accepted_keys(toml: &str) -> Vec<String> {
     match Scenario::parse(toml, Path::new("probe.toml")) {
         Err(ScenarioError::Parse { message, .. }) => {
             // serde says "expected `a`" for one field, "expected one of `a`, `b`" for more.
-            let list = message.split("expected").nth(1).unwrap_or_else(|| panic!("{message}"));
-            list.split('`').skip(1).step_by(2).map(String::from).collect()
+            let list = message
+                .split("expected")
+                .nth(1)
+                .unwrap_or_else(|| panic!("{message}"));
+            list.split('`')
+                .skip(1)
+                .step_by(2)
+                .map(String::from)
+                .collect()
         }
         other => panic!("expected an unknown-field error, got {other:?}"),
     }
@@ -18,15 +25,22 @@ fn accepted_keys(toml: &str) -> Vec<String> {
 
 /// The README text between `### <heading>` and the next heading.
 fn section<'a>(readme: &'a str, heading: &str) -> &'a str {
-    let start = readme.find(&format!("### {heading}")).unwrap_or_else(|| panic!("README lacks ### {heading}"));
+    let start = readme
+        .find(&format!("### {heading}"))
+        .unwrap_or_else(|| panic!("README lacks ### {heading}"));
     let rest = &readme[start + 4..];
-    let end = rest.find("\n### ").or_else(|| rest.find("\n## ")).unwrap_or(rest.len());
+    let end = rest
+        .find("\n### ")
+        .or_else(|| rest.find("\n## "))
+        .unwrap_or(rest.len());
     &rest[..end]
 }
 
 #[test]
 fn readme_documents_every_scenario_key() {
-    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md")).unwrap();
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md"))
+            .unwrap();
     let cases = [
         ("top level", "zzz = 1\n"),
         ("`[mesh]`", "[mesh]\nzzz = 1\n"),
@@ -46,10 +60,17 @@ fn readme_documents_every_scenario_key() {
         for key in keys {
             if heading == "top level" && key != "title" {
                 // Tables, documented under their own headings.
-                assert!(readme.contains(&format!("`[{key}]`")) || readme.contains(&format!("`[[{key}]]`")), "README lacks table {key}");
+                assert!(
+                    readme.contains(&format!("`[{key}]`"))
+                        || readme.contains(&format!("`[[{key}]]`")),
+                    "README lacks table {key}"
+                );
                 continue;
             }
-            assert!(text.contains(&format!("`{key}`")), "README section {heading} lacks `{key}`");
+            assert!(
+                text.contains(&format!("`{key}`")),
+                "README section {heading} lacks `{key}`"
+            );
         }
     }
 }

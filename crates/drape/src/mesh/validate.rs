@@ -15,7 +15,9 @@ pub enum MeshError {
     #[error("the mesh has no triangle")]
     Empty,
     /// A connectivity entry names a node that does not exist.
-    #[error("element {element} refers to node {node}, but the mesh has {count} nodes (0-based)")]
+    #[error(
+        "element {element} (0-based, in the order read) refers to node {node}, but the mesh has {count} nodes"
+    )]
     NodeOutOfRange {
         /// Element index.
         element: usize,
@@ -25,7 +27,7 @@ pub enum MeshError {
         count: usize,
     },
     /// A node coordinate is NaN or infinite.
-    #[error("node {node} has a non-finite coordinate {coordinates:?}")]
+    #[error("node {node} (0-based) has a non-finite coordinate {coordinates:?}")]
     NonFinite {
         /// Node index.
         node: usize,
@@ -33,7 +35,7 @@ pub enum MeshError {
         coordinates: [f64; 3],
     },
     /// The same node appears twice in one element.
-    #[error("element {element} uses node {node} more than once")]
+    #[error("element {element} (0-based, in the order read) uses node {node} more than once")]
     RepeatedNode {
         /// Element index.
         element: usize,
@@ -42,7 +44,7 @@ pub enum MeshError {
     },
     /// The element's vertices are (nearly) collinear.
     #[error(
-        "element {element} is degenerate: its area {area:.3e} m^2 is below 1e-10 of its longest edge squared"
+        "element {element} (0-based, in the order read) is degenerate: its area {area:.3e} m^2 is below 1e-10 of its longest edge squared"
     )]
     Degenerate {
         /// Element index.
@@ -52,14 +54,16 @@ pub enum MeshError {
     },
     /// A curved element folds over itself: its tangent plane turns against
     /// the plane of its vertices.
-    #[error("element {element} is inverted: its Jacobian changes sign inside the element")]
+    #[error(
+        "element {element} (0-based, in the order read) is inverted: its Jacobian changes sign inside the element"
+    )]
     Inverted {
         /// Element index.
         element: usize,
     },
     /// Two neighbouring elements have opposite orientations (normals).
     #[error(
-        "elements {element} and {neighbour} share an edge but are oriented oppositely (one of them is inverted)"
+        "elements {element} and {neighbour} (0-based, in the order read) share an edge but are oriented oppositely (one of them is inverted)"
     )]
     InconsistentOrientation {
         /// One element.

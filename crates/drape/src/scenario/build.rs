@@ -580,10 +580,10 @@ fn build_mesh(c: &Checker, spec: &MeshSpec, base: &Path) -> Result<Mesh, Scenari
             }
             let rel = c.required(t, None, "path", &spec.path, "for shape = \"file\"")?;
             let path: PathBuf = base.join(&rel);
-            let mesh = read_mesh_file(&path).map_err(|message| ScenarioError::Mesh {
-                file: c.file.to_path_buf(),
-                message: format!("{}: {message}", path.display()),
-            })?;
+            let mesh =
+                read_mesh_file(&path).map_err(|message| c.invalid(t, None, "path", message))?;
+            mesh.validate()
+                .map_err(|e| c.invalid(t, None, "path", format!("{}: {e}", path.display())))?;
             if let Some(o) = order
                 && o != mesh.order
             {

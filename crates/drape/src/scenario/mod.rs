@@ -428,14 +428,28 @@ impl Scenario {
 
     /// Parses scenario text; `path` is used in messages.
     pub fn parse(source: &str, path: &Path) -> Result<Self, ScenarioError> {
-        toml::from_str(source).map_err(|e| {
+        toml::from_str(source).map_err(|mut e| {
             let line = e
                 .span()
                 .map(|s| source[..s.start.min(source.len())].matches('\n').count() + 1);
+            let mut message = e.message().trim().to_string();
+            // The error's full text ends with "in `table.key`" when serde
+            // knows where it was: name the key, as for range errors.
+            e.set_input(None);
+            let full = e.to_string();
+            if let Some(key) = full
+                .lines()
+                .rev()
+                .find_map(|l| l.trim().strip_prefix("in `"))
+                .and_then(|k| k.strip_suffix('`'))
+                && !key.is_empty()
+            {
+                message = format!("`{key}`: {message}");
+            }
             ScenarioError::Parse {
                 file: path.to_path_buf(),
                 line,
-                message: e.message().trim().to_string(),
+                message,
             }
         })
     }

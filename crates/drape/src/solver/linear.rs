@@ -37,9 +37,7 @@ pub enum Factorization {
 #[non_exhaustive]
 pub enum LinearSolveError {
     /// The matrix is singular (LU found no pivot, or the solution is not finite).
-    #[error(
-        "the Hessian is singular ({detail}); a membrane without tension has no stiffness across its plane: add mass (dynamic analysis), prestress or supports"
-    )]
+    #[error("the Hessian is singular ({detail})")]
     Singular {
         /// What the factorisation reported.
         detail: String,

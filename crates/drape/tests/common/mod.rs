@@ -4,9 +4,12 @@
 use drape::scenario::{Scenario, Setup};
 use std::path::{Path, PathBuf};
 
-/// A fresh, empty directory under the system's temp dir.
+/// A fresh, empty directory under the system's temp dir, unique to this
+/// call (tests run in parallel threads of one process).
 pub fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("drape-test-{}-{name}", std::process::id()));
+    static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let k = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("drape-test-{}-{k}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
