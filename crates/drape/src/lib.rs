@@ -11,6 +11,8 @@
 //! solves) → [`output`] (history, fields, summary); [`simulation`] drives
 //! the loop. See `ARCHITECTURE.md` for the map.
 #![warn(missing_docs)]
+// Kernels index arrays the way the equations do (`F[i][c]`, `phi[a]`).
+#![allow(clippy::needless_range_loop)]
 
 pub mod element;
 pub mod fd;

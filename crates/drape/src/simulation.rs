@@ -180,6 +180,7 @@ pub fn history_columns(setup: &Setup) -> Vec<String> {
 }
 
 impl Writer<'_> {
+    #[allow(clippy::too_many_arguments)]
     fn row(
         &mut self,
         step: usize,

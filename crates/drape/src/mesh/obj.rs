@@ -99,7 +99,7 @@ pub fn parse_obj(bytes: &[u8], source: &str) -> Result<Mesh, MeshReadError> {
         let base = nodes.len();
         for p in mesh.positions.chunks_exact(3) {
             if let &[x, y, z] = p {
-                nodes.push([f64::from(x), f64::from(y), f64::from(z)]);
+                nodes.push([x, y, z]);
             }
         }
         let count = nodes.len() - base;
@@ -228,7 +228,7 @@ fn normalize(bytes: &[u8], file: &str) -> Result<Vec<u8>, MeshReadError> {
                 file: file.to_owned(),
                 at: Some(Location::Line(line)),
                 node: vertices,
-                value: f64::from(value),
+                value,
             });
         }
         out.extend_from_slice(b"v");

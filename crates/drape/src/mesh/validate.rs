@@ -83,7 +83,7 @@ impl Mesh {
     /// neighbours must traverse their shared edge in opposite directions.
     pub fn validate(&self) -> Result<(), MeshError> {
         let npe = self.order.nodes_per_element();
-        if self.connectivity.is_empty() || self.connectivity.len() % npe != 0 {
+        if self.connectivity.is_empty() || !self.connectivity.len().is_multiple_of(npe) {
             return Err(MeshError::Empty);
         }
         for (i, x) in self.nodes.iter().enumerate() {

@@ -222,10 +222,9 @@ impl Model {
 
     /// Adds `c M` to Hessian values on the pattern.
     pub fn add_mass_to_hessian(&self, c: f64, h: &mut [f64]) {
-        let (ptr, rows) = self.pattern.node_graph();
+        let (ptr, _) = self.pattern.node_graph();
         for b in 0..self.mesh.node_count() {
             for p in ptr[b]..ptr[b + 1] {
-                let _ = rows;
                 let m = c * self.mass[p];
                 for i in 0..3 {
                     h[self.pattern.entry(p, b, i, i)] += m;

@@ -136,7 +136,7 @@ impl LinearSolver {
                 detail: "the solution is not finite".into(),
             });
         }
-        if !(residual <= 1e-6 * b_norm) {
+        if residual.is_nan() || residual > 1e-6 * b_norm {
             return Err(LinearSolveError::Singular {
                 detail: format!(
                     "the {} solve leaves a relative residual of {:.1e}",
