@@ -89,6 +89,11 @@ impl LinearSolver {
         })
     }
 
+    /// Entries of the Cholesky factor `L`, once it has been analysed.
+    pub fn cholesky_nnz(&self) -> Option<usize> {
+        self.llt.as_ref().map(|(s, _)| s.len_val())
+    }
+
     /// Dimension of the system.
     pub fn dimension(&self) -> usize {
         self.symbolic.nrows()
