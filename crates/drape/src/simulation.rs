@@ -9,6 +9,7 @@
 //! every converged step, and `summary.json` says `"failed"` and why.
 
 use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
+use crate::contact::ContactReport;
 use crate::integrator::{State, StaticStepper};
 use crate::output::atomic::write_atomic;
 use crate::output::history::HistoryWriter;
@@ -146,6 +147,17 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
     }
 }
 
+/// One converged step, as recorded in the history.
+struct StepRecord {
+    step: usize,
+    dt: f64,
+    iterations: usize,
+    strain: f64,
+    cutbacks: usize,
+    min_stretch: f64,
+    contact: Option<ContactReport>,
+}
+
 struct Writer<'a> {
     setup: &'a Setup,
     dir: PathBuf,
@@ -175,50 +187,59 @@ pub fn history_columns(setup: &Setup) -> Vec<String> {
             columns.push(format!("{}_{c}", m.name));
         }
     }
-    columns.extend(["external_work", "total_energy", "min_stretch", "cutbacks"].map(String::from));
+    columns.extend(
+        [
+            "external_work",
+            "contact_energy",
+            "total_energy",
+            "min_stretch",
+            "cutbacks",
+        ]
+        .map(String::from),
+    );
     columns
 }
 
 impl Writer<'_> {
-    #[allow(clippy::too_many_arguments)]
-    fn row(
-        &mut self,
-        step: usize,
-        state: &State,
-        dt: f64,
-        iterations: usize,
-        strain: f64,
-        cutbacks: usize,
-        min_stretch: f64,
-    ) -> Result<f64, RunError> {
+    fn row(&mut self, state: &State, r: &StepRecord) -> Result<f64, RunError> {
         let model = &self.setup.model;
         let kinetic = model.kinetic_energy(&state.velocities, &mut self.scratch);
+        let (active, force, min_gap, contact_energy) = match &r.contact {
+            Some(c) => (
+                c.active as f64,
+                crate::vec3::norm(c.resultant),
+                c.min_gap,
+                c.energy,
+            ),
+            None => (0.0, 0.0, f64::NAN, 0.0),
+        };
         let mut row = vec![
-            step as f64,
+            r.step as f64,
             state.time,
-            dt,
-            iterations as f64,
+            r.dt,
+            r.iterations as f64,
             kinetic,
-            strain,
-            0.0,
-            0.0,
-            f64::NAN,
+            r.strain,
+            active,
+            force,
+            min_gap,
         ];
         for m in &self.setup.monitors {
             row.extend_from_slice(&state.positions[3 * m.node..3 * m.node + 3]);
         }
         row.extend_from_slice(&[
             state.external_work,
-            kinetic + strain - state.external_work,
-            min_stretch,
-            cutbacks as f64,
+            contact_energy,
+            kinetic + r.strain + contact_energy - state.external_work,
+            r.min_stretch,
+            r.cutbacks as f64,
         ]);
         let path = self.history.path().to_path_buf();
         self.history.write_row(&row).map_err(io_err(&path))?;
         Ok(kinetic)
     }
 
-    fn frame(&mut self, step: usize, state: &State) -> Result<(), RunError> {
+    fn frame(&mut self, step: usize, state: &State, contact: Option<&ContactReport>) -> Result<(), RunError> {
         let model = &self.setup.model;
         let positions: Vec<[f64; 3]> = state
             .positions
@@ -231,7 +252,10 @@ impl Writer<'_> {
             .zip(model.mesh.nodes.iter().flatten())
             .map(|(y, x)| y - x)
             .collect();
-        let contact = vec![0.0; state.positions.len()];
+        let contact: Vec<f64> = match contact {
+            Some(c) => c.nodal_forces.iter().flatten().copied().collect(),
+            None => vec![0.0; state.positions.len()],
+        };
         let results = model.element_results(&state.positions);
         let stress: Vec<f64> = results.stress.iter().flatten().copied().collect();
         let principal: Vec<f64> = results.principal.iter().flatten().copied().collect();
@@ -333,16 +357,9 @@ pub fn run(
             (s, segments.clone(), end)
         }
         Analysis::Static { steps } => {
-            let n = x.len();
             ws.f_ext.fill(0.0);
             (
-                State {
-                    time: 0.0,
-                    positions: x.clone(),
-                    velocities: vec![0.0; n],
-                    accelerations: vec![0.0; n],
-                    external_work: 0.0,
-                },
+                State::at_rest(model, x.clone()),
                 vec![(*steps, 1.0 / *steps as f64)],
                 1.0,
             )
@@ -358,16 +375,28 @@ pub fn run(
         scratch: vec![0.0; model.dofs()],
     };
     let strain0 = model.strain_energy(&state.positions);
+    let contact_report = |state: &State| {
+        model
+            .contact
+            .as_ref()
+            .zip(state.contact.as_ref())
+            .map(|(c, s)| c.report(&state.positions, state.time, s))
+    };
+    let mut last_contact = contact_report(&state);
     writer.row(
-        0,
         &state,
-        0.0,
-        0,
-        strain0,
-        0,
-        model.min_stretch(&state.positions).0,
+        &StepRecord {
+            step: 0,
+            dt: 0.0,
+            iterations: 0,
+            strain: strain0,
+            cutbacks: 0,
+            min_stretch: model.min_stretch(&state.positions).0,
+            contact: last_contact.clone(),
+        },
     )?;
-    writer.frame(0, &state)?;
+    writer.frame(0, &state, last_contact.as_ref())?;
+    let mut first_contact_time = None;
 
     let mut step = 0usize;
     let mut iterations = 0usize;
@@ -391,14 +420,23 @@ pub fn run(
                         }
                         last_strain = outcome.strain_energy;
                         let (stretch, element) = model.min_stretch(&state.positions);
+                        last_contact = contact_report(&state);
+                        if first_contact_time.is_none()
+                            && last_contact.as_ref().is_some_and(|c| c.active > 0)
+                        {
+                            first_contact_time = Some(state.time);
+                        }
                         let kinetic = writer.row(
-                            step,
                             &state,
-                            h,
-                            outcome.newton.iterations,
-                            outcome.strain_energy,
-                            depth,
-                            stretch,
+                            &StepRecord {
+                                step,
+                                dt: h,
+                                iterations: outcome.newton.iterations,
+                                strain: outcome.strain_energy,
+                                cutbacks: depth,
+                                min_stretch: stretch,
+                                contact: last_contact.clone(),
+                            },
                         )?;
                         observer(&StepInfo {
                             step,
@@ -413,7 +451,7 @@ pub fn run(
                         });
                         since_frame += 1;
                         if since_frame >= setup.output_every {
-                            writer.frame(step, &state)?;
+                            writer.frame(step, &state, last_contact.as_ref())?;
                             last_written = step;
                             since_frame = 0;
                         }
@@ -453,10 +491,10 @@ pub fn run(
         }
     }
     if last_written != step {
-        writer.frame(step, &state)?;
+        writer.frame(step, &state, last_contact.as_ref())?;
     }
     let kinetic = model.kinetic_energy(&state.velocities, &mut writer.scratch);
-    let summary = summary(
+    let mut summary = summary(
         setup,
         &state,
         failure.as_ref().map(ToString::to_string),
@@ -467,6 +505,7 @@ pub fn run(
         kinetic,
         last_strain,
     );
+    summary.first_contact_time = first_contact_time;
     write_summary(out, &summary)?;
     match failure {
         Some(e) => Err(e),
@@ -529,15 +568,7 @@ fn write_summary(out: &Path, summary: &Summary) -> Result<(), RunError> {
 
 /// Writes a failed summary for a run that could not start, and returns the error.
 fn setup_failure(setup: &Setup, out: &Path, start: Instant, message: String) -> RunError {
-    let x = setup.model.initial_positions();
-    let n = x.len();
-    let state = State {
-        time: 0.0,
-        positions: x,
-        velocities: vec![0.0; n],
-        accelerations: vec![0.0; n],
-        external_work: 0.0,
-    };
+    let state = State::at_rest(&setup.model, setup.model.initial_positions());
     let summary = summary(
         setup,
         &state,

@@ -41,14 +41,7 @@ fn model(mesh: Mesh, fixed: Vec<bool>) -> Model {
 /// `y0` puts them; returns the positions and Newton's residual history.
 fn equilibrium(model: &Model, y0: Vec<f64>) -> (Vec<f64>, Vec<f64>) {
     let mut ws = DynamicWorkspace::new(model).unwrap();
-    let n = y0.len();
-    let mut state = State {
-        time: 0.0,
-        positions: y0,
-        velocities: vec![0.0; n],
-        accelerations: vec![0.0; n],
-        external_work: 0.0,
-    };
+    let mut state = State::at_rest(model, y0);
     let settings = NewtonSettings {
         tolerance: 1e-12,
         residual_tolerance: 1e-10,

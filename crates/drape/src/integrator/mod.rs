@@ -1,5 +1,6 @@
 //! Time integration: Newmark-beta in positions (dynamic) and load stepping
-//! (static), each step solved by Newton–Raphson (SPEC §1.6–1.7).
+//! (static), each step solved by Newton–Raphson (SPEC §1.6–1.7), with the
+//! contact active-set loop for Lagrange multipliers (SPEC §1.8).
 
 pub mod newmark;
 pub mod statics;
@@ -7,8 +8,10 @@ pub mod statics;
 pub use newmark::Newmark;
 pub use statics::StaticStepper;
 
+use crate::contact::lagrange::{ActiveNode, MAX_ACTIVE_SET_ROUNDS};
+use crate::contact::{ContactMethod, ContactModel, ContactState};
 use crate::model::Model;
-use crate::solver::newton::{Evaluation, NewtonSystem};
+use crate::solver::newton::{self, Evaluation, NewtonError, NewtonReport, NewtonSettings, NewtonSystem, NewtonWorkspace};
 
 /// The state carried from step to step.
 #[derive(Debug, Clone, PartialEq)]
@@ -24,10 +27,29 @@ pub struct State {
     /// Work done by the external loads since the start (J), by the
     /// trapezoidal rule on each step: `1/2 (F_n + F_{n+1}) . (Y_{n+1} - Y_n)`.
     pub external_work: f64,
+    /// Contact features, active set and multipliers (with obstacles).
+    pub contact: Option<ContactState>,
 }
 
-/// The residual `G = F_int - F_ext + c M Y - M Q` and Hessian `H = K -
-/// dF_p/dY + c M` of one step (static: `c = 0`, no `M Q`).
+impl State {
+    /// At rest in the configuration `positions`, at time 0.
+    pub fn at_rest(model: &Model, positions: Vec<f64>) -> Self {
+        let n = positions.len();
+        let contact = model.contact.as_ref().map(|c| c.initial_state(&positions));
+        Self {
+            time: 0.0,
+            positions,
+            velocities: vec![0.0; n],
+            accelerations: vec![0.0; n],
+            external_work: 0.0,
+            contact,
+        }
+    }
+}
+
+/// The residual `G = F_int - F_ext + c M Y - M Q + F_contact` and Hessian
+/// `H = K - dF_p/dY + c M + H_contact` of one step (static: `c = 0`, no
+/// `M Q`), supports and (Lagrange) contact constraints imposed.
 pub(crate) struct StepSystem<'a> {
     pub model: &'a Model,
     /// `1 / (beta dt^2)`, or 0 in statics.
@@ -38,12 +60,18 @@ pub(crate) struct StepSystem<'a> {
     pub dead: &'a [f64],
     /// Follower pressure of this step (Pa).
     pub pressure: f64,
+    /// Time at the end of the step (obstacle positions).
+    pub time: f64,
+    /// Contact state of the step (hints, active set), fixed during Newton.
+    pub contact: Option<&'a ContactState>,
     /// Last evaluation's internal and external forces, and `M Y`.
     pub f_int: &'a mut [f64],
     pub f_ext: &'a mut [f64],
     pub my: &'a mut [f64],
     /// Strain energy at the last evaluation (J).
     pub strain_energy: f64,
+    /// Lagrange: the active nodes at the last evaluation.
+    pub active: Vec<ActiveNode>,
 }
 
 fn norm(v: &[f64]) -> f64 {
@@ -72,9 +100,127 @@ impl NewtonSystem for StepSystem<'_> {
                 g[i] = self.f_int[i] - self.f_ext[i];
             }
         }
+        if let (Some(contact), Some(state)) = (&model.contact, self.contact)
+            && let ContactMethod::Penalty { stiffness } = contact.method
+        {
+            contact.add_penalty(
+                stiffness,
+                y,
+                self.time,
+                state,
+                g,
+                h.as_deref_mut().map(|h| (h, &model.pattern)),
+            );
+        }
         model.apply_supports(g, h.as_deref_mut());
+        if let (Some(contact), Some(state)) = (&model.contact, self.contact)
+            && contact.method == ContactMethod::Lagrange
+        {
+            let mut active = contact.active_nodes(y, self.time, state, &model.fixed);
+            // Keep the elimination scales of the last Hessian evaluation.
+            for (new, old) in active.iter_mut().zip(&self.active) {
+                new.scale = old.scale;
+            }
+            ContactModel::impose_lagrange(&mut active, g, h.as_deref_mut().map(|h| (h, &model.pattern)));
+            self.active = active;
+        }
         let symmetric = model.symmetric_by_construction()
             || h.is_some_and(|h| model.pattern.asymmetry(h) < 1e-10);
         Evaluation { scale, symmetric }
+    }
+
+    fn transform_increment(&self, dy: &mut [f64]) {
+        ContactModel::rotate_back(&self.active, dy);
+    }
+}
+
+/// The terms of a step's residual other than the elements'.
+pub(crate) struct StepTerms<'a> {
+    pub c: f64,
+    pub mq: &'a [f64],
+    pub dead: &'a [f64],
+    pub pressure: f64,
+    pub time: f64,
+}
+
+/// Solves one step from the first guess `y`: Newton, and for Lagrange
+/// contact the active-set loop around it. On success `contact` holds the
+/// converged active set, multipliers and refreshed features; on error it is
+/// unchanged. Returns Newton's report (iterations summed over re-solutions)
+/// and the strain energy.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn solve_step(
+    model: &Model,
+    terms: StepTerms,
+    contact: &mut Option<ContactState>,
+    y: &mut [f64],
+    length: f64,
+    settings: &NewtonSettings,
+    ws: &mut NewtonWorkspace,
+    f_int: &mut [f64],
+    f_ext: &mut [f64],
+    my: &mut [f64],
+) -> Result<(NewtonReport, f64), NewtonError> {
+    let saved = contact.clone();
+    let mut total: Option<NewtonReport> = None;
+    let mut rounds = 0;
+    loop {
+        let mut system = StepSystem {
+            model,
+            c: terms.c,
+            mq: terms.mq,
+            dead: terms.dead,
+            pressure: terms.pressure,
+            time: terms.time,
+            contact: contact.as_ref(),
+            f_int: &mut *f_int,
+            f_ext: &mut *f_ext,
+            my: &mut *my,
+            strain_energy: 0.0,
+            active: Vec::new(),
+        };
+        let result = newton::solve(&mut system, y, length, settings, ws);
+        let strain = system.strain_energy;
+        let active = std::mem::take(&mut system.active);
+        let report = match result {
+            Ok(r) => r,
+            Err(e) => {
+                *contact = saved;
+                return Err(e);
+            }
+        };
+        total = Some(match total {
+            None => report,
+            Some(mut t) => {
+                t.iterations += report.iterations;
+                t.residuals.extend(report.residuals);
+                t.increments.extend(report.increments);
+                t.factorization = report.factorization.or(t.factorization);
+                t
+            }
+        });
+        let (Some(cm), Some(state)) = (&model.contact, contact.as_mut()) else {
+            return Ok((total.unwrap_or_else(empty_report), strain));
+        };
+        let changed = cm.method == ContactMethod::Lagrange
+            && cm.update_active_set(y, terms.time, state, &active, &model.fixed, length);
+        if !changed {
+            cm.refresh_features(y, terms.time, state);
+            return Ok((total.unwrap_or_else(empty_report), strain));
+        }
+        rounds += 1;
+        if rounds > MAX_ACTIVE_SET_ROUNDS {
+            *contact = saved;
+            return Err(NewtonError::ActiveSetCycle { rounds });
+        }
+    }
+}
+
+fn empty_report() -> NewtonReport {
+    NewtonReport {
+        iterations: 0,
+        residuals: Vec::new(),
+        increments: Vec::new(),
+        factorization: None,
     }
 }

@@ -11,9 +11,9 @@
 //! satisfies the step exactly when the acceleration does not change (free
 //! fall under a uniform load, for any `beta`, `gamma`).
 
-use super::{State, StepSystem};
+use super::{State, StepTerms, solve_step};
 use crate::model::Model;
-use crate::solver::newton::{self, NewtonError, NewtonReport, NewtonSettings, NewtonWorkspace};
+use crate::solver::newton::{NewtonError, NewtonReport, NewtonSettings, NewtonWorkspace};
 
 /// Newmark parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -90,13 +90,9 @@ impl Newmark {
         model.add_mass_to_hessian(1.0, &mut m);
         model.apply_supports(&mut rhs, Some(&mut m));
         ws.newton.linear.solve(&m, true, &mut rhs)?;
-        Ok(State {
-            time: 0.0,
-            positions: x,
-            velocities: vec![0.0; n],
-            accelerations: rhs,
-            external_work: 0.0,
-        })
+        let mut state = State::at_rest(model, x);
+        state.accelerations = rhs;
+        Ok(state)
     }
 
     /// Advances `state` by `dt`. On error `state` is unchanged.
@@ -127,20 +123,26 @@ impl Newmark {
                     + 0.5 * dt * dt * state.accelerations[i]
             })
             .collect();
-        let mut system = StepSystem {
-            model,
+        let terms = StepTerms {
             c,
             mq: &ws.mq,
             dead: &ws.dead,
             pressure: model.pressure_at(t1, None),
-            f_int: &mut ws.f_int,
-            f_ext: &mut ws.f_ext,
-            my: &mut ws.my,
-            strain_energy: 0.0,
+            time: t1,
         };
-        let result = newton::solve(&mut system, &mut y, length, settings, &mut ws.newton);
-        let strain_energy = system.strain_energy;
-        let report = match result {
+        let result = solve_step(
+            model,
+            terms,
+            &mut state.contact,
+            &mut y,
+            length,
+            settings,
+            &mut ws.newton,
+            &mut ws.f_int,
+            &mut ws.f_ext,
+            &mut ws.my,
+        );
+        let (report, strain_energy) = match result {
             Ok(r) => r,
             Err(e) => {
                 ws.f_ext.copy_from_slice(&old_ext);

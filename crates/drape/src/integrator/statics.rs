@@ -11,10 +11,10 @@
 //! dynamic analysis, which the mass term regularises; run it to rest with
 //! `beta = 1, gamma = 1.5` for a static solution.
 
-use super::{State, StepSystem};
+use super::{State, StepTerms, solve_step};
 use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
 use crate::model::Model;
-use crate::solver::newton::{self, NewtonError, NewtonSettings};
+use crate::solver::newton::{NewtonError, NewtonSettings};
 
 /// Load stepping over `steps` equal increments of the load factor.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -41,21 +41,27 @@ impl StaticStepper {
         model.dead_forces(lambda, Some(lambda), &mut dead);
         let old_ext = ws.f_ext.clone();
         let mut y = state.positions.clone();
-        let mut my = Vec::new();
-        let mut system = StepSystem {
-            model,
+        let mut my = vec![0.0; y.len()];
+        let terms = StepTerms {
             c: 0.0,
             mq: &[],
             dead: &dead,
             pressure: model.pressure_at(lambda, Some(lambda)),
-            f_int: &mut ws.f_int,
-            f_ext: &mut ws.f_ext,
-            my: &mut my,
-            strain_energy: 0.0,
+            time: lambda,
         };
-        let result = newton::solve(&mut system, &mut y, length, settings, &mut ws.newton);
-        let strain_energy = system.strain_energy;
-        let report = match result {
+        let result = solve_step(
+            model,
+            terms,
+            &mut state.contact,
+            &mut y,
+            length,
+            settings,
+            &mut ws.newton,
+            &mut ws.f_int,
+            &mut ws.f_ext,
+            &mut my,
+        );
+        let (report, strain_energy) = match result {
             Ok(r) => r,
             Err(e) => {
                 ws.f_ext.copy_from_slice(&old_ext);

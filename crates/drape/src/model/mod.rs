@@ -54,6 +54,8 @@ pub struct Model {
     area_weights: Vec<f64>,
     /// Pressure quadrature (shared by all elements).
     pressure_quadrature: PressureQuadrature,
+    /// Rigid obstacles and contact enforcement, if any.
+    pub contact: Option<crate::contact::ContactModel>,
 }
 
 /// Why a model cannot be built.
@@ -111,6 +113,7 @@ impl Model {
             mass,
             area_weights,
             pressure_quadrature,
+            contact: None,
         })
     }
 

@@ -5,6 +5,7 @@ use super::{
     AnalysisKind, BoxSpec, FixSpec, LoadKindSpec, LoadSpec, MeshShape, MeshSpec, Scenario,
     ScenarioError,
 };
+use crate::contact::{ContactMethod, ContactModel, RigidBody};
 use crate::element::membrane::Section;
 use crate::integrator::Newmark;
 use crate::load::{Load, LoadKind};
@@ -215,23 +216,7 @@ impl Scenario {
         for (i, f) in self.fixes.iter().enumerate() {
             build_fix(&c, &mesh, i, f, &mut fixed)?;
         }
-        if !self.obstacles.is_empty() {
-            return Err(c.invalid(
-                "obstacle",
-                Some(0),
-                "shape",
-                "contact with obstacles is not available in this version".into(),
-            ));
-        }
-        if let Some(contact) = &self.contact {
-            let _ = contact;
-            return Err(c.invalid(
-                "contact",
-                None,
-                "method",
-                "contact is not available in this version".into(),
-            ));
-        }
+        let contact = build_contact(&c, self, &base)?;
 
         let analysis = match self.analysis.kind {
             AnalysisKind::Dynamic => {
@@ -414,6 +399,8 @@ impl Scenario {
             file: file.to_path_buf(),
             message: e.to_string(),
         })?;
+        let mut model = model;
+        model.contact = contact;
         let title = self.title.clone().unwrap_or_else(|| {
             file.file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
@@ -433,6 +420,114 @@ impl Scenario {
             monitors,
         })
     }
+}
+
+fn build_contact(
+    c: &Checker,
+    s: &Scenario,
+    base: &Path,
+) -> Result<Option<ContactModel>, ScenarioError> {
+    use crate::contact::obstacle::{
+        BoxObstacle, CylinderObstacle, PlaneObstacle, SphereObstacle, read_mesh_obstacle,
+    };
+    if s.obstacles.is_empty() {
+        if s.contact.is_some() {
+            return Err(c.invalid("contact", None, "method", "is given but there is no [[obstacle]]".into()));
+        }
+        return Ok(None);
+    }
+    let spec = c.required(
+        "contact",
+        None,
+        "method",
+        &s.contact,
+        "when there are obstacles (a [contact] table with method = \"penalty\" or \"lagrange\")",
+    )?;
+    let method = match spec.method.as_str() {
+        "penalty" => {
+            let eta = c.required("contact", None, "penalty", &spec.penalty, "for method = \"penalty\" (N/m)")?;
+            ContactMethod::Penalty { stiffness: c.positive("contact", None, "penalty", eta)? }
+        }
+        "lagrange" => {
+            c.absent("contact", None, "penalty", &spec.penalty, "to method = \"lagrange\"")?;
+            ContactMethod::Lagrange
+        }
+        other => {
+            return Err(c.invalid("contact", None, "method", format!("must be \"penalty\" or \"lagrange\", not {other:?}")));
+        }
+    };
+    let mut bodies = Vec::new();
+    for (i, o) in s.obstacles.iter().enumerate() {
+        let t = "obstacle";
+        let ix = Some(i);
+        let keys: [(&str, bool); 9] = [
+            ("min", o.min.is_some()),
+            ("max", o.max.is_some()),
+            ("point", o.point.is_some()),
+            ("normal", o.normal.is_some()),
+            ("center", o.center.is_some()),
+            ("radius", o.radius.is_some()),
+            ("axis", o.axis.is_some()),
+            ("height", o.height.is_some()),
+            ("path", o.path.is_some()),
+        ];
+        let allowed: &[&str] = match o.shape.as_str() {
+            "plane" => &["point", "normal"],
+            "box" => &["min", "max"],
+            "sphere" => &["center", "radius"],
+            "cylinder" => &["center", "axis", "radius", "height"],
+            "mesh" => &["path"],
+            other => {
+                return Err(c.invalid(t, ix, "shape", format!(
+                    "must be \"plane\", \"box\", \"sphere\", \"cylinder\" or \"mesh\", not {other:?}"
+                )));
+            }
+        };
+        for (key, given) in keys {
+            if given && !allowed.contains(&key) {
+                return Err(c.invalid(t, ix, key, format!("does not apply to shape = {:?}", o.shape)));
+            }
+        }
+        let why = format!("for shape = {:?}", o.shape);
+        let invalid = |key: &str, e: crate::contact::ObstacleError| c.invalid(t, ix, key, e.to_string());
+        let shape: Box<dyn crate::contact::Obstacle> = match o.shape.as_str() {
+            "plane" => Box::new(
+                PlaneObstacle::new(
+                    c.required(t, ix, "point", &o.point, &why)?,
+                    c.required(t, ix, "normal", &o.normal, &why)?,
+                )
+                .map_err(|e| invalid("normal", e))?,
+            ),
+            "box" => Box::new(
+                BoxObstacle::new(c.required(t, ix, "min", &o.min, &why)?, c.required(t, ix, "max", &o.max, &why)?)
+                    .map_err(|e| invalid("max", e))?,
+            ),
+            "sphere" => Box::new(
+                SphereObstacle::new(
+                    c.required(t, ix, "center", &o.center, &why)?,
+                    c.required(t, ix, "radius", &o.radius, &why)?,
+                )
+                .map_err(|e| invalid("radius", e))?,
+            ),
+            "cylinder" => Box::new(
+                CylinderObstacle::new(
+                    c.required(t, ix, "center", &o.center, &why)?,
+                    c.required(t, ix, "axis", &o.axis, &why)?,
+                    c.required(t, ix, "radius", &o.radius, &why)?,
+                    c.required(t, ix, "height", &o.height, &why)?,
+                )
+                .map_err(|e| invalid("radius", e))?,
+            ),
+            _ => {
+                let rel = c.required(t, ix, "path", &o.path, &why)?;
+                Box::new(read_mesh_obstacle(&base.join(&rel)).map_err(|e| invalid("path", e))?)
+            }
+        };
+        let velocity = o.velocity.unwrap_or([0.0; 3]);
+        c.finite(t, ix, "velocity", &velocity)?;
+        bodies.push(RigidBody { shape, velocity });
+    }
+    Ok(Some(ContactModel { bodies, method }))
 }
 
 fn nearest(

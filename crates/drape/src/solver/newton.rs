@@ -86,6 +86,12 @@ pub enum NewtonError {
     /// The linear system could not be solved.
     #[error(transparent)]
     Linear(#[from] LinearSolveError),
+    /// The contact active set did not settle.
+    #[error("the contact active set kept changing for {rounds} re-solutions of the step")]
+    ActiveSetCycle {
+        /// Re-solutions tried.
+        rounds: usize,
+    },
 }
 
 /// What an evaluation of the system reports besides `G` and `H`.
@@ -101,6 +107,10 @@ pub struct Evaluation {
 pub trait NewtonSystem {
     /// Writes `G(y)` into `g` and, if asked, `H(y)` into `h`.
     fn evaluate(&mut self, y: &[f64], g: &mut [f64], h: Option<&mut [f64]>) -> Evaluation;
+
+    /// Maps the solution of `H dY = -G` to the increment of `Y` (for systems
+    /// solved in rotated local bases). Default: the identity.
+    fn transform_increment(&self, _dy: &mut [f64]) {}
 }
 
 /// Buffers reused across Newton iterations and steps.
@@ -185,6 +195,7 @@ pub fn solve(
             *d = -g;
         }
         report.factorization = Some(ws.linear.solve(&ws.h, eval.symmetric, &mut ws.dy)?);
+        system.transform_increment(&mut ws.dy);
         for (yi, d) in y.iter_mut().zip(&ws.dy) {
             *yi += d;
         }

@@ -1,0 +1,256 @@
+//! Frictionless contact of the fabric's nodes with rigid obstacles
+//! (SPEC §1.8): node-to-surface, every node a projectile, every obstacle a
+//! target.
+//!
+//! * [`obstacle`]: the geometry — gap, normal, normal derivative of plane,
+//!   box, sphere, capped cylinder and closed triangle mesh, and the rule
+//!   that decides which face pushes a node out near edges and corners.
+//! * [`penalty`]: the potential `C = 1/2 eta g^2` while `g < 0`.
+//! * [`lagrange`]: exact `g = 0` on an active set, by elimination.
+//!
+//! # Per-node state across steps
+//!
+//! For every node and obstacle the *feature* (face) reported at the end of
+//! the last converged step is kept and handed back as the hint during the
+//! whole of the next step: a node that came down onto the top face of a box
+//! is pushed back through the top face even when it lies exactly above an
+//! edge, with penalty and multipliers alike (see [`obstacle`]). Features are
+//! refreshed for every node within a margin of a quarter of the obstacle's
+//! bounding-box diagonal around its bounding box; nodes further away cannot
+//! reach it in one step (a node would need to travel that far).
+//!
+//! A node in contact with several obstacles at once is in contact with the
+//! one it penetrates most (Lagrange), or with all of them (penalty).
+
+pub mod lagrange;
+pub mod obstacle;
+pub mod penalty;
+
+pub use obstacle::{Obstacle, ObstacleError, Proximity};
+
+use crate::vec3::{add, scale, sub};
+use rayon::prelude::*;
+
+/// An obstacle and its prescribed rigid motion.
+#[derive(Debug)]
+pub struct RigidBody {
+    /// The shape, at `t = 0`.
+    pub shape: Box<dyn Obstacle>,
+    /// Rigid translation velocity (m/s): at time `t` the body has moved by `v t`.
+    pub velocity: [f64; 3],
+}
+
+impl RigidBody {
+    /// Proximity of point `y` at time `t`.
+    pub fn proximity(&self, y: [f64; 3], t: f64, hint: Option<u32>) -> Proximity {
+        let offset = scale(self.velocity, t);
+        self.shape.proximity(sub(y, offset), hint).translated(offset)
+    }
+
+    /// The constraint of a node held on `feature` at time `t`, and whether
+    /// it still lies on that face (see [`Obstacle::constraint`]).
+    pub fn constraint(&self, y: [f64; 3], t: f64, feature: u32) -> (Proximity, bool) {
+        let offset = scale(self.velocity, t);
+        let (p, on) = self.shape.constraint(sub(y, offset), feature);
+        (p.translated(offset), on)
+    }
+
+    /// Whether `y` is far enough from the body at time `t` to be skipped
+    /// (outside its bounding box grown by `margin`).
+    fn far(&self, y: [f64; 3], t: f64, margin: f64) -> bool {
+        let (lo, hi) = self.shape.bounding_box();
+        let offset = scale(self.velocity, t);
+        (0..3).any(|i| y[i] < lo[i] + offset[i] - margin || y[i] > hi[i] + offset[i] + margin)
+    }
+
+    /// The feature-refresh margin (m): a quarter of the bounding box's diagonal
+    /// (1 m for unbounded shapes such as planes).
+    fn margin(&self) -> f64 {
+        let (lo, hi) = self.shape.bounding_box();
+        let d = sub(hi, lo);
+        let diag = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        if diag.is_finite() { 0.25 * diag } else { 1.0 }
+    }
+}
+
+/// How contact is enforced.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ContactMethod {
+    /// Penalty with stiffness `eta` (N/m per node).
+    Penalty {
+        /// `eta` (N/m).
+        stiffness: f64,
+    },
+    /// Lagrange multipliers, `g = 0` exactly on the active set.
+    Lagrange,
+}
+
+/// The obstacles and the enforcement method.
+#[derive(Debug)]
+pub struct ContactModel {
+    /// Rigid obstacles.
+    pub bodies: Vec<RigidBody>,
+    /// Enforcement.
+    pub method: ContactMethod,
+}
+
+/// Contact state carried from step to step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactState {
+    /// `hints[p * bodies + k]`: feature of node `p` on body `k` at the end of
+    /// the last converged step (`u32::MAX`: unknown).
+    pub hints: Vec<u32>,
+    /// Lagrange: the body and the feature (face) node `p` is held on, if any.
+    pub active: Vec<Option<(u32, u32)>>,
+    /// Lagrange: multiplier `lambda_p >= 0` (N), the compressive contact
+    /// force of node `p` (0 when inactive).
+    pub multipliers: Vec<f64>,
+}
+
+/// What contact does at a converged state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactReport {
+    /// Node–obstacle pairs in contact.
+    pub active: usize,
+    /// Resultant contact force on the fabric `sum_p f_p` (N).
+    pub resultant: [f64; 3],
+    /// Smallest gap over all nodes and obstacles (m); `+inf` without obstacles.
+    pub min_gap: f64,
+    /// Stored penalty energy `sum 1/2 eta g^2` (J); 0 with multipliers.
+    pub energy: f64,
+    /// Contact force on each node (N), pushing it out of the obstacles.
+    pub nodal_forces: Vec<[f64; 3]>,
+}
+
+impl ContactModel {
+    /// The initial state of `nodes` nodes: features computed at the initial
+    /// positions, nothing active.
+    pub fn initial_state(&self, y: &[f64]) -> ContactState {
+        let nodes = y.len() / 3;
+        let mut state = ContactState {
+            hints: vec![u32::MAX; nodes * self.bodies.len()],
+            active: vec![None; nodes],
+            multipliers: vec![0.0; nodes],
+        };
+        self.refresh_features(y, 0.0, &mut state);
+        state
+    }
+
+    /// The hint of node `p` on body `k`.
+    #[inline]
+    pub fn hint(&self, state: &ContactState, p: usize, k: usize) -> Option<u32> {
+        let h = state.hints[p * self.bodies.len() + k];
+        (h != u32::MAX).then_some(h)
+    }
+
+    /// Records the features of the nodes near each body at positions `y`,
+    /// time `t` (after a converged step).
+    pub fn refresh_features(&self, y: &[f64], t: f64, state: &mut ContactState) {
+        let nb = self.bodies.len();
+        if nb == 0 {
+            return;
+        }
+        let margins: Vec<f64> = self.bodies.iter().map(RigidBody::margin).collect();
+        state
+            .hints
+            .par_chunks_mut(nb)
+            .enumerate()
+            .for_each(|(p, hints)| {
+                let yp = [y[3 * p], y[3 * p + 1], y[3 * p + 2]];
+                for (k, body) in self.bodies.iter().enumerate() {
+                    if body.far(yp, t, margins[k]) {
+                        continue;
+                    }
+                    let h = (hints[k] != u32::MAX).then_some(hints[k]);
+                    hints[k] = body.proximity(yp, t, h).feature;
+                }
+            });
+    }
+
+    /// Every node–body pair with a gap below `threshold` at `y`, time `t`,
+    /// using the state's hints: `(node, body, proximity)`; and the smallest
+    /// gap of all.
+    /// With `exact_min_gap`, every node is queried so that the smallest gap
+    /// is exact; otherwise nodes outside the bodies' grown bounding boxes
+    /// are skipped and count with the margin (a lower bound of their gap).
+    pub fn near_pairs(
+        &self,
+        y: &[f64],
+        t: f64,
+        state: &ContactState,
+        threshold: f64,
+        exact_min_gap: bool,
+    ) -> (Vec<(usize, usize, Proximity)>, f64) {
+        let nodes = y.len() / 3;
+        let margins: Vec<f64> = self.bodies.iter().map(RigidBody::margin).collect();
+        let (pairs, min_gap) = (0..nodes)
+            .into_par_iter()
+            .fold(
+                || (Vec::new(), f64::INFINITY),
+                |(mut acc, mut min), p| {
+                    let yp = [y[3 * p], y[3 * p + 1], y[3 * p + 2]];
+                    for (k, body) in self.bodies.iter().enumerate() {
+                        if !exact_min_gap && body.far(yp, t, margins[k]) {
+                            // Far outside: the gap is at least the margin.
+                            min = min.min(margins[k]);
+                            continue;
+                        }
+                        let prox = body.proximity(yp, t, self.hint(state, p, k));
+                        min = min.min(prox.gap);
+                        if prox.gap < threshold {
+                            acc.push((p, k, prox));
+                        }
+                    }
+                    (acc, min)
+                },
+            )
+            .reduce(
+                || (Vec::new(), f64::INFINITY),
+                |(mut a, ma), (b, mb)| {
+                    a.extend(b);
+                    (a, ma.min(mb))
+                },
+            );
+        (pairs, min_gap)
+    }
+
+    /// The contact report at a converged state. For multipliers, `state`
+    /// holds the converged active set and multipliers.
+    pub fn report(&self, y: &[f64], t: f64, state: &ContactState) -> ContactReport {
+        let nodes = y.len() / 3;
+        let mut nodal_forces = vec![[0.0; 3]; nodes];
+        let (pairs, min_gap) = self.near_pairs(y, t, state, 0.0, true);
+        let mut active = 0;
+        let mut energy = 0.0;
+        match self.method {
+            ContactMethod::Penalty { stiffness } => {
+                for (p, _, prox) in &pairs {
+                    active += 1;
+                    energy += 0.5 * stiffness * prox.gap * prox.gap;
+                    nodal_forces[*p] = add(nodal_forces[*p], scale(prox.normal, -stiffness * prox.gap));
+                }
+            }
+            ContactMethod::Lagrange => {
+                for p in 0..nodes {
+                    if let Some((k, feature)) = state.active[p] {
+                        active += 1;
+                        let (prox, _) = self.bodies[k as usize].constraint(
+                            [y[3 * p], y[3 * p + 1], y[3 * p + 2]],
+                            t,
+                            feature,
+                        );
+                        nodal_forces[p] = scale(prox.normal, state.multipliers[p]);
+                    }
+                }
+            }
+        }
+        let resultant = nodal_forces.iter().fold([0.0; 3], |a, f| add(a, *f));
+        ContactReport {
+            active,
+            resultant,
+            min_gap: if self.bodies.is_empty() { f64::INFINITY } else { min_gap },
+            energy,
+            nodal_forces,
+        }
+    }
+}
