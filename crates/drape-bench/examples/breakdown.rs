@@ -12,20 +12,42 @@ use drape::solver::LinearSolver;
 use std::time::Instant;
 
 fn main() {
-    let n: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(100);
+    let n: usize = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(100);
     let t0 = Instant::now();
-    let mesh = rectangle([0.2, 0.2], [n, n], Pattern::Right, [0.0; 3], ElementOrder::Linear);
+    let mesh = rectangle(
+        [0.2, 0.2],
+        [n, n],
+        Pattern::Right,
+        [0.0; 3],
+        ElementOrder::Linear,
+    );
     let model = Model::new(
         mesh,
         Box::new(SaintVenantKirchhoff::new(2.0e6, 0.3)),
-        Section { thickness: 6e-4, prestress: 0.0 },
+        Section {
+            thickness: 6e-4,
+            prestress: 0.0,
+        },
         320.0,
-        vec![Load { kind: LoadKind::Surface { force: [0.0, 0.0, -1.8816] }, ramp: None }],
+        vec![Load {
+            kind: LoadKind::Surface {
+                force: [0.0, 0.0, -1.8816],
+            },
+            ramp: None,
+        }],
         vec![],
         MassKind::Consistent,
     )
     .unwrap();
-    println!("{n}x{n}: {} DOF, nnz {}, model set-up {:.3} s", model.dofs(), model.pattern.nnz(), t0.elapsed().as_secs_f64());
+    println!(
+        "{n}x{n}: {} DOF, nnz {}, model set-up {:.3} s",
+        model.dofs(),
+        model.pattern.nnz(),
+        t0.elapsed().as_secs_f64()
+    );
     let y: Vec<f64> = model
         .initial_positions()
         .chunks(3)
@@ -36,7 +58,10 @@ fn main() {
     let mut h = vec![0.0; model.pattern.nnz()];
     let t = Instant::now();
     let mut linear = LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx).unwrap();
-    println!("  solver set-up            {:.4} s", t.elapsed().as_secs_f64());
+    println!(
+        "  solver set-up            {:.4} s",
+        t.elapsed().as_secs_f64()
+    );
     model.assemble(&y, 0.0, &mut fi, &mut fe, Some(&mut h));
     model.add_mass_to_hessian(1e6, &mut h);
     bare(&model.pattern.col_ptr, &model.pattern.row_idx, &h);
@@ -52,7 +77,9 @@ fn main() {
         linear.solve(&h, true, &mut g).unwrap();
         let ts = t.elapsed().as_secs_f64();
         println!("  nnz(L) = {:?}", linear.cholesky_nnz());
-        println!("  round {round}: assemble {ta:.4} s, add mass {tm:.4} s, factorise+solve {ts:.4} s (first includes the symbolic analysis)");
+        println!(
+            "  round {round}: assemble {ta:.4} s, add mass {tm:.4} s, factorise+solve {ts:.4} s (first includes the symbolic analysis)"
+        );
     }
 }
 
@@ -78,16 +105,35 @@ pub fn bare(col_ptr: &[usize], row_idx: &[usize], values: &[f64]) {
         }
         let sym = SymbolicSparseColMat::new_checked(n, n, cp, None, ri);
         let t = Instant::now();
-        let symb = factorize_symbolic_cholesky(sym.as_ref(), Side::Lower, SymmetricOrdering::Amd, Default::default()).unwrap();
+        let symb = factorize_symbolic_cholesky(
+            sym.as_ref(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            Default::default(),
+        )
+        .unwrap();
         let ts = t.elapsed().as_secs_f64();
         let mut l = vec![0.0; symb.len_val()];
         let par = Par::Seq;
-        let mut mem = MemBuffer::new(symb.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
+        let mut mem =
+            MemBuffer::new(symb.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
         let a = SparseColMatRef::new(sym.as_ref(), &v);
         for _ in 0..2 {
             let t = Instant::now();
-            symb.factorize_numeric_llt::<f64>(&mut l, a, Side::Lower, LltRegularization::default(), par, MemStack::new(&mut mem), Default::default()).unwrap();
-            println!("  bare faer (lower only: {lower_only}): symbolic {ts:.4} s, numeric {:.4} s", t.elapsed().as_secs_f64());
+            symb.factorize_numeric_llt::<f64>(
+                &mut l,
+                a,
+                Side::Lower,
+                LltRegularization::default(),
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .unwrap();
+            println!(
+                "  bare faer (lower only: {lower_only}): symbolic {ts:.4} s, numeric {:.4} s",
+                t.elapsed().as_secs_f64()
+            );
         }
     }
 }

@@ -8,8 +8,8 @@
 //! the last converged state is written as a field frame, the history holds
 //! every converged step, and `summary.json` says `"failed"` and why.
 
-use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
 use crate::contact::ContactReport;
+use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
 use crate::integrator::{State, StaticStepper};
 use crate::output::atomic::write_atomic;
 use crate::output::history::HistoryWriter;
@@ -239,7 +239,12 @@ impl Writer<'_> {
         Ok(kinetic)
     }
 
-    fn frame(&mut self, step: usize, state: &State, contact: Option<&ContactReport>) -> Result<(), RunError> {
+    fn frame(
+        &mut self,
+        step: usize,
+        state: &State,
+        contact: Option<&ContactReport>,
+    ) -> Result<(), RunError> {
         let model = &self.setup.model;
         let positions: Vec<[f64; 3]> = state
             .positions

@@ -81,15 +81,24 @@ impl ContactModel {
     /// The active nodes of `state` at positions `y`, time `t`, with their
     /// proximities and frames (scales and multipliers still to be filled).
     /// Nodes with a fixed component are never held by contact.
-    pub fn active_nodes(&self, y: &[f64], t: f64, state: &ContactState, fixed: &[bool]) -> Vec<ActiveNode> {
+    pub fn active_nodes(
+        &self,
+        y: &[f64],
+        t: f64,
+        state: &ContactState,
+        fixed: &[bool],
+    ) -> Vec<ActiveNode> {
         let mut out = Vec::new();
         for (p, held) in state.active.iter().enumerate() {
             let Some((k, feature)) = *held else { continue };
             if fixed[3 * p] || fixed[3 * p + 1] || fixed[3 * p + 2] {
                 continue;
             }
-            let (prox, on_face) =
-                self.bodies[k as usize].constraint([y[3 * p], y[3 * p + 1], y[3 * p + 2]], t, feature);
+            let (prox, on_face) = self.bodies[k as usize].constraint(
+                [y[3 * p], y[3 * p + 1], y[3 * p + 2]],
+                t,
+                feature,
+            );
             out.push(ActiveNode {
                 node: p,
                 on_face,
@@ -106,7 +115,15 @@ impl ContactModel {
     /// Hessian `h` (see the module documentation). `g` must hold the
     /// residual without contact, supports already applied. With `h`, the
     /// nodes' scales are (re)computed; without, the previous ones are used.
-    pub fn impose_lagrange(active: &mut [ActiveNode], g: &mut [f64], h: Option<(&mut [f64], &SparsePattern)>) {
+    ///
+    /// Returns the merit norm: `|G|` of the rotated residual with the
+    /// normal entries `k g`, before the right-hand-side corrections of the
+    /// prescribed increments (which are not residuals).
+    pub fn impose_lagrange(
+        active: &mut [ActiveNode],
+        g: &mut [f64],
+        h: Option<(&mut [f64], &SparsePattern)>,
+    ) -> f64 {
         for a in active.iter_mut() {
             let p = a.node;
             let gp = [g[3 * p], g[3 * p + 1], g[3 * p + 2]];
@@ -117,7 +134,7 @@ impl ContactModel {
                 rotate_residual(a, g);
                 g[3 * a.node + 2] = a.scale * a.proximity.gap;
             }
-            return;
+            return norm_of(g);
         };
         let (ptr, rows) = pattern.node_graph();
         // Curvature of the constraint, then the scale, on the diagonal block.
@@ -159,6 +176,10 @@ impl ContactModel {
             }
             rotate_residual(a, g);
         }
+        for a in active.iter() {
+            g[3 * a.node + 2] = a.scale * a.proximity.gap;
+        }
+        let merit = norm_of(g);
         // Eliminate each normal unknown as the prescribed increment -gap.
         for a in active.iter() {
             let d = 3 * a.node + 2;
@@ -174,6 +195,7 @@ impl ContactModel {
             h[pattern.diagonal_of(d)] = a.scale;
             g[d] = a.scale * gap;
         }
+        merit
     }
 
     /// Rotates the increments of the active nodes back from their local bases.
@@ -200,7 +222,10 @@ impl ContactModel {
         length: f64,
     ) -> bool {
         state.multipliers.iter_mut().for_each(|m| *m = 0.0);
-        let lambda_max = active.iter().map(|a| a.multiplier.abs()).fold(0.0, f64::max);
+        let lambda_max = active
+            .iter()
+            .map(|a| a.multiplier.abs())
+            .fold(0.0, f64::max);
         let mut changed = false;
         for a in active {
             if a.multiplier < -1e-9 * lambda_max || !a.on_face {
@@ -231,6 +256,10 @@ impl ContactModel {
         }
         changed
     }
+}
+
+fn norm_of(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 fn rotate_residual(a: &ActiveNode, g: &mut [f64]) {

@@ -44,7 +44,9 @@ impl RigidBody {
     /// Proximity of point `y` at time `t`.
     pub fn proximity(&self, y: [f64; 3], t: f64, hint: Option<u32>) -> Proximity {
         let offset = scale(self.velocity, t);
-        self.shape.proximity(sub(y, offset), hint).translated(offset)
+        self.shape
+            .proximity(sub(y, offset), hint)
+            .translated(offset)
     }
 
     /// The constraint of a node held on `feature` at time `t`, and whether
@@ -227,7 +229,8 @@ impl ContactModel {
                 for (p, _, prox) in &pairs {
                     active += 1;
                     energy += 0.5 * stiffness * prox.gap * prox.gap;
-                    nodal_forces[*p] = add(nodal_forces[*p], scale(prox.normal, -stiffness * prox.gap));
+                    nodal_forces[*p] =
+                        add(nodal_forces[*p], scale(prox.normal, -stiffness * prox.gap));
                 }
             }
             ContactMethod::Lagrange => {
@@ -248,7 +251,11 @@ impl ContactModel {
         ContactReport {
             active,
             resultant,
-            min_gap: if self.bodies.is_empty() { f64::INFINITY } else { min_gap },
+            min_gap: if self.bodies.is_empty() {
+                f64::INFINITY
+            } else {
+                min_gap
+            },
             energy,
             nodal_forces,
         }

@@ -36,10 +36,13 @@ impl ContactModel {
                 g[3 * p + i] += stiffness * gap * n[i];
             }
             if let Some((h, pattern)) = h.as_mut() {
-                let block = pattern.node_block(p, p).expect("diagonal blocks are in the pattern");
+                let block = pattern
+                    .node_block(p, p)
+                    .expect("diagonal blocks are in the pattern");
                 for i in 0..3 {
                     for j in 0..3 {
-                        h[pattern.entry(block, p, i, j)] += stiffness * (n[i] * n[j] + gap * dn[i][j]);
+                        h[pattern.entry(block, p, i, j)] +=
+                            stiffness * (n[i] * n[j] + gap * dn[i][j]);
                     }
                 }
             }

@@ -11,7 +11,9 @@ pub use statics::StaticStepper;
 use crate::contact::lagrange::{ActiveNode, MAX_ACTIVE_SET_ROUNDS};
 use crate::contact::{ContactMethod, ContactModel, ContactState};
 use crate::model::Model;
-use crate::solver::newton::{self, Evaluation, NewtonError, NewtonReport, NewtonSettings, NewtonSystem, NewtonWorkspace};
+use crate::solver::newton::{
+    self, Evaluation, NewtonError, NewtonReport, NewtonSettings, NewtonSystem, NewtonWorkspace,
+};
 
 /// The state carried from step to step.
 #[derive(Debug, Clone, PartialEq)]
@@ -113,6 +115,7 @@ impl NewtonSystem for StepSystem<'_> {
             );
         }
         model.apply_supports(g, h.as_deref_mut());
+        let mut merit = None;
         if let (Some(contact), Some(state)) = (&model.contact, self.contact)
             && contact.method == ContactMethod::Lagrange
         {
@@ -121,12 +124,20 @@ impl NewtonSystem for StepSystem<'_> {
             for (new, old) in active.iter_mut().zip(&self.active) {
                 new.scale = old.scale;
             }
-            ContactModel::impose_lagrange(&mut active, g, h.as_deref_mut().map(|h| (h, &model.pattern)));
+            merit = Some(ContactModel::impose_lagrange(
+                &mut active,
+                g,
+                h.as_deref_mut().map(|h| (h, &model.pattern)),
+            ));
             self.active = active;
         }
         let symmetric = model.symmetric_by_construction()
             || h.is_some_and(|h| model.pattern.asymmetry(h) < 1e-10);
-        Evaluation { scale, symmetric }
+        Evaluation {
+            scale,
+            symmetric,
+            merit,
+        }
     }
 
     fn transform_increment(&self, dy: &mut [f64]) {

@@ -428,11 +428,16 @@ fn build_contact(
     base: &Path,
 ) -> Result<Option<ContactModel>, ScenarioError> {
     use crate::contact::obstacle::{
-        BoxObstacle, CylinderObstacle, PlaneObstacle, SphereObstacle, read_mesh_obstacle,
+        BoxObstacle, CylinderObstacle, PlaneObstacle, Rounded, SphereObstacle, read_mesh_obstacle,
     };
     if s.obstacles.is_empty() {
         if s.contact.is_some() {
-            return Err(c.invalid("contact", None, "method", "is given but there is no [[obstacle]]".into()));
+            return Err(c.invalid(
+                "contact",
+                None,
+                "method",
+                "is given but there is no [[obstacle]]".into(),
+            ));
         }
         return Ok(None);
     }
@@ -445,22 +450,42 @@ fn build_contact(
     )?;
     let method = match spec.method.as_str() {
         "penalty" => {
-            let eta = c.required("contact", None, "penalty", &spec.penalty, "for method = \"penalty\" (N/m)")?;
-            ContactMethod::Penalty { stiffness: c.positive("contact", None, "penalty", eta)? }
+            let eta = c.required(
+                "contact",
+                None,
+                "penalty",
+                &spec.penalty,
+                "for method = \"penalty\" (N/m)",
+            )?;
+            ContactMethod::Penalty {
+                stiffness: c.positive("contact", None, "penalty", eta)?,
+            }
         }
         "lagrange" => {
-            c.absent("contact", None, "penalty", &spec.penalty, "to method = \"lagrange\"")?;
+            c.absent(
+                "contact",
+                None,
+                "penalty",
+                &spec.penalty,
+                "to method = \"lagrange\"",
+            )?;
             ContactMethod::Lagrange
         }
         other => {
-            return Err(c.invalid("contact", None, "method", format!("must be \"penalty\" or \"lagrange\", not {other:?}")));
+            return Err(c.invalid(
+                "contact",
+                None,
+                "method",
+                format!("must be \"penalty\" or \"lagrange\", not {other:?}"),
+            ));
         }
     };
     let mut bodies = Vec::new();
     for (i, o) in s.obstacles.iter().enumerate() {
         let t = "obstacle";
         let ix = Some(i);
-        let keys: [(&str, bool); 9] = [
+        let keys: [(&str, bool); 10] = [
+            ("edge_radius", o.edge_radius.is_some()),
             ("min", o.min.is_some()),
             ("max", o.max.is_some()),
             ("point", o.point.is_some()),
@@ -473,9 +498,9 @@ fn build_contact(
         ];
         let allowed: &[&str] = match o.shape.as_str() {
             "plane" => &["point", "normal"],
-            "box" => &["min", "max"],
+            "box" => &["min", "max", "edge_radius"],
             "sphere" => &["center", "radius"],
-            "cylinder" => &["center", "axis", "radius", "height"],
+            "cylinder" => &["center", "axis", "radius", "height", "edge_radius"],
             "mesh" => &["path"],
             other => {
                 return Err(c.invalid(t, ix, "shape", format!(
@@ -485,11 +510,17 @@ fn build_contact(
         };
         for (key, given) in keys {
             if given && !allowed.contains(&key) {
-                return Err(c.invalid(t, ix, key, format!("does not apply to shape = {:?}", o.shape)));
+                return Err(c.invalid(
+                    t,
+                    ix,
+                    key,
+                    format!("does not apply to shape = {:?}", o.shape),
+                ));
             }
         }
         let why = format!("for shape = {:?}", o.shape);
-        let invalid = |key: &str, e: crate::contact::ObstacleError| c.invalid(t, ix, key, e.to_string());
+        let invalid =
+            |key: &str, e: crate::contact::ObstacleError| c.invalid(t, ix, key, e.to_string());
         let shape: Box<dyn crate::contact::Obstacle> = match o.shape.as_str() {
             "plane" => Box::new(
                 PlaneObstacle::new(
@@ -498,10 +529,22 @@ fn build_contact(
                 )
                 .map_err(|e| invalid("normal", e))?,
             ),
-            "box" => Box::new(
-                BoxObstacle::new(c.required(t, ix, "min", &o.min, &why)?, c.required(t, ix, "max", &o.max, &why)?)
-                    .map_err(|e| invalid("max", e))?,
-            ),
+            "box" => {
+                let (lo, hi) = (
+                    c.required(t, ix, "min", &o.min, &why)?,
+                    c.required(t, ix, "max", &o.max, &why)?,
+                );
+                let sharp = BoxObstacle::new(lo, hi).map_err(|e| invalid("max", e))?;
+                let smallest = (0..3).map(|k| hi[k] - lo[k]).fold(f64::INFINITY, f64::min);
+                let r = edge_radius(c, ix, o.edge_radius, smallest)?;
+                if r > 0.0 {
+                    let inner = BoxObstacle::new(lo.map(|v| v + r), hi.map(|v| v - r))
+                        .map_err(|e| invalid("edge_radius", e))?;
+                    Box::new(Rounded::new(inner, r))
+                } else {
+                    Box::new(sharp)
+                }
+            }
             "sphere" => Box::new(
                 SphereObstacle::new(
                     c.required(t, ix, "center", &o.center, &why)?,
@@ -509,15 +552,32 @@ fn build_contact(
                 )
                 .map_err(|e| invalid("radius", e))?,
             ),
-            "cylinder" => Box::new(
-                CylinderObstacle::new(
+            "cylinder" => {
+                let (center, axis) = (
                     c.required(t, ix, "center", &o.center, &why)?,
                     c.required(t, ix, "axis", &o.axis, &why)?,
+                );
+                let (radius, height) = (
                     c.required(t, ix, "radius", &o.radius, &why)?,
                     c.required(t, ix, "height", &o.height, &why)?,
-                )
-                .map_err(|e| invalid("radius", e))?,
-            ),
+                );
+                let sharp = CylinderObstacle::new(center, axis, radius, height)
+                    .map_err(|e| invalid("radius", e))?;
+                let r = edge_radius(c, ix, o.edge_radius, radius.min(height))?;
+                if r > 0.0 {
+                    let a = sharp.axis();
+                    let inner = CylinderObstacle::new(
+                        [0, 1, 2].map(|k| center[k] - r * a[k]),
+                        a,
+                        radius - r,
+                        height - 2.0 * r,
+                    )
+                    .map_err(|e| invalid("edge_radius", e))?;
+                    Box::new(Rounded::new(inner, r))
+                } else {
+                    Box::new(sharp)
+                }
+            }
             _ => {
                 let rel = c.required(t, ix, "path", &o.path, &why)?;
                 Box::new(read_mesh_obstacle(&base.join(&rel)).map_err(|e| invalid("path", e))?)
@@ -528,6 +588,29 @@ fn build_contact(
         bodies.push(RigidBody { shape, velocity });
     }
     Ok(Some(ContactModel { bodies, method }))
+}
+
+/// The fillet radius of a box or cylinder whose smallest dimension is
+/// `smallest`: the given one (>= 0, below half of it), or 1e-3 of it.
+fn edge_radius(
+    c: &Checker,
+    ix: Option<usize>,
+    given: Option<f64>,
+    smallest: f64,
+) -> Result<f64, ScenarioError> {
+    match given {
+        None => Ok(1e-3 * smallest),
+        Some(r) if r.is_finite() && r >= 0.0 && r < 0.5 * smallest => Ok(r),
+        Some(r) => Err(c.invalid(
+            "obstacle",
+            ix,
+            "edge_radius",
+            format!(
+                "must lie in [0, {}) m (half the smallest dimension), not {r}",
+                0.5 * smallest
+            ),
+        )),
+    }
 }
 
 fn nearest(

@@ -253,6 +253,11 @@ pub struct ObstacleSpec {
     pub path: Option<PathBuf>,
     /// Rigid velocity (m/s). Default 0.
     pub velocity: Option<[f64; 3]>,
+    /// Box, cylinder: radius (m) to which edges (the cylinder's rims) are
+    /// rounded, keeping the faces in place; 0 for sharp edges. Default:
+    /// 1e-3 of the smallest dimension (box: shortest side; cylinder: the
+    /// smaller of radius and height).
+    pub edge_radius: Option<f64>,
 }
 
 /// `[contact]`.

@@ -13,7 +13,11 @@
 //!
 //! A first guess whose residual is already at round-off (`|G| <= 1e-13
 //! scale`, e.g. free fall from the Newmark predictor) is accepted with no
-//! iteration. NaN or infinite residuals, a residual that grows by `1e8`
+//! iteration. Each Newton increment is applied in full when it reduces
+//! `|G|`, as it always does near a solution (so quadratic convergence is
+//! kept); otherwise it is halved, at most four times (a backtracking line
+//! search: contact makes `G` only piecewise smooth, and a full step can
+//! overshoot a node's entry into or exit from contact). NaN or infinite residuals, a residual that grows by `1e8`
 //! over the first one, and running out of iterations are errors that the
 //! time integrator answers by cutting the step.
 
@@ -101,6 +105,10 @@ pub struct Evaluation {
     pub scale: f64,
     /// Whether `H` is symmetric (Cholesky applies).
     pub symmetric: bool,
+    /// The residual norm to judge convergence and progress by, when it is
+    /// not `|G|` (constrained systems whose `G` carries right-hand-side
+    /// corrections).
+    pub merit: Option<f64>,
 }
 
 /// A nonlinear system `G(Y) = 0` with Hessian `H = dG/dY` on a fixed pattern.
@@ -119,6 +127,7 @@ pub struct NewtonWorkspace {
     g: Vec<f64>,
     h: Vec<f64>,
     dy: Vec<f64>,
+    y_old: Vec<f64>,
     /// The sparse direct solver (symbolic analysis kept).
     pub linear: LinearSolver,
 }
@@ -130,6 +139,7 @@ impl NewtonWorkspace {
             g: vec![0.0; n],
             h: vec![0.0; nnz],
             dy: vec![0.0; n],
+            y_old: vec![0.0; n],
             linear,
         }
     }
@@ -154,20 +164,17 @@ pub fn solve(
         increments: Vec::new(),
         factorization: None,
     };
-    let mut first: Option<(f64, f64)> = None;
+    let mut eval = system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]));
+    let mut have_hessian = true;
+    let mut residual = eval.merit.unwrap_or_else(|| norm(&ws.g));
+    report.residuals.push(residual);
+    let (r0, scale0) = (residual, eval.scale);
     let mut increment = f64::INFINITY;
     loop {
         let it = report.iterations;
-        // Near convergence, evaluate G alone first: the Hessian is needed
-        // only if the point is not yet accepted.
-        let likely_done = increment <= settings.tolerance;
-        let mut eval = system.evaluate(y, &mut ws.g, (!likely_done).then_some(&mut ws.h[..]));
-        let residual = norm(&ws.g);
-        report.residuals.push(residual);
         if !residual.is_finite() {
             return Err(NewtonError::NonFinite { iteration: it });
         }
-        let (r0, scale0) = *first.get_or_insert((residual, eval.scale));
         let small = residual <= settings.residual_tolerance * eval.scale;
         if (it > 0 && increment <= settings.tolerance && small)
             || residual <= 1e-13 * eval.scale
@@ -188,7 +195,7 @@ pub fn solve(
                 increment,
             });
         }
-        if likely_done {
+        if !have_hessian {
             eval = system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]));
         }
         for (d, g) in ws.dy.iter_mut().zip(&ws.g) {
@@ -196,10 +203,29 @@ pub fn solve(
         }
         report.factorization = Some(ws.linear.solve(&ws.h, eval.symmetric, &mut ws.dy)?);
         system.transform_increment(&mut ws.dy);
-        for (yi, d) in y.iter_mut().zip(&ws.dy) {
-            *yi += d;
+        // Backtracking on |G|: full steps as long as they reduce the
+        // residual (always, near a solution); halved up to four times where
+        // the residual is only piecewise smooth (contact entering and
+        // leaving) and a full step overshoots.
+        ws.y_old.copy_from_slice(y);
+        let mut alpha = 1.0;
+        loop {
+            for ((yi, y0), d) in y.iter_mut().zip(&ws.y_old).zip(&ws.dy) {
+                *yi = y0 + alpha * d;
+            }
+            eval = system.evaluate(y, &mut ws.g, None);
+            let trial = eval.merit.unwrap_or_else(|| norm(&ws.g));
+            if (trial.is_finite() && trial <= (1.0 - 1e-4 * alpha) * residual)
+                || alpha <= 1.0 / 16.0
+            {
+                residual = trial;
+                break;
+            }
+            alpha *= 0.5;
         }
-        increment = norm(&ws.dy) / length;
+        have_hessian = false;
+        report.residuals.push(residual);
+        increment = alpha * norm(&ws.dy) / length;
         report.increments.push(increment);
         report.iterations += 1;
     }

@@ -134,7 +134,12 @@ impl Obstacle for BoxObstacle {
         let on_face = (0..3)
             .filter(|&k| k != axis)
             .all(|k| y[k] >= self.min[k] - self.tolerance && y[k] <= self.max[k] + self.tolerance);
-        let plane = plane_proximity(y, self.plane_distances(y)[f], Self::FACE_NORMALS[f], feature);
+        let plane = plane_proximity(
+            y,
+            self.plane_distances(y)[f],
+            Self::FACE_NORMALS[f],
+            feature,
+        );
         (plane, on_face)
     }
 

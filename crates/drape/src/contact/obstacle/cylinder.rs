@@ -169,7 +169,10 @@ impl Obstacle for CylinderObstacle {
         let rho = norm(r);
         let tol = self.tolerance;
         match feature {
-            Self::TOP => (plane_proximity(y, h, a, Self::TOP), rho <= self.radius + tol),
+            Self::TOP => (
+                plane_proximity(y, h, a, Self::TOP),
+                rho <= self.radius + tol,
+            ),
             Self::BOTTOM => (
                 plane_proximity(y, -self.height - h, scale(a, -1.0), Self::BOTTOM),
                 rho <= self.radius + tol,

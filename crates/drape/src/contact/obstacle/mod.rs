@@ -101,6 +101,7 @@ mod bvh;
 pub mod cuboid;
 pub mod cylinder;
 pub mod plane;
+pub mod rounded;
 pub mod sphere;
 pub mod stl;
 pub mod trimesh;
@@ -108,6 +109,7 @@ pub mod trimesh;
 pub use cuboid::BoxObstacle;
 pub use cylinder::CylinderObstacle;
 pub use plane::PlaneObstacle;
+pub use rounded::Rounded;
 pub use sphere::SphereObstacle;
 pub use trimesh::{TriMeshObstacle, read_mesh_obstacle};
 
