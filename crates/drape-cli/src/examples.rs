@@ -2,11 +2,20 @@
 
 /// `(name, text)` of every bundled example.
 pub const ALL: &[(&str, &str)] = &[
-    ("fabric-on-pedestal", include_str!("../../../examples/fabric-on-pedestal.toml")),
+    (
+        "fabric-on-pedestal",
+        include_str!("../../../examples/fabric-on-pedestal.toml"),
+    ),
     (
         "fabric-on-pedestal-lagrange",
         include_str!("../../../examples/fabric-on-pedestal-lagrange.toml"),
     ),
-    ("hanging-cloth", include_str!("../../../examples/hanging-cloth.toml")),
-    ("inflated-disc", include_str!("../../../examples/inflated-disc.toml")),
+    (
+        "hanging-cloth",
+        include_str!("../../../examples/hanging-cloth.toml"),
+    ),
+    (
+        "inflated-disc",
+        include_str!("../../../examples/inflated-disc.toml"),
+    ),
 ];
