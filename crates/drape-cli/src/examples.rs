@@ -11,6 +11,10 @@ pub const ALL: &[(&str, &str)] = &[
         include_str!("../../../examples/fabric-on-pedestal-lagrange.toml"),
     ),
     (
+        "drape-tester",
+        include_str!("../../../examples/drape-tester.toml"),
+    ),
+    (
         "hanging-cloth",
         include_str!("../../../examples/hanging-cloth.toml"),
     ),

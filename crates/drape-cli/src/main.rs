@@ -218,13 +218,12 @@ fn example(name: Option<&str>, write: Option<&Path>) -> Result<(), Failure> {
     let Some(name) = name else {
         println!("bundled examples (drape example NAME [--write FILE]):");
         for (n, text) in examples::ALL {
-            let first = text
+            let title = text
                 .lines()
-                .next()
-                .unwrap_or("")
-                .trim_start_matches('#')
-                .trim();
-            println!("  {n:<28} {first}");
+                .find_map(|l| l.strip_prefix("title = "))
+                .map(|t| t.trim().trim_matches('"'))
+                .unwrap_or("");
+            println!("  {n:<28} {title}");
         }
         return Ok(());
     };

@@ -634,6 +634,31 @@ struct BadInput {
 
 const BAD_INPUTS: &[BadInput] = &[
     BadInput {
+        file: "obstacle_without_contact.toml",
+        fragments: &["`contact.method`", "required when there are obstacles"],
+        line: None,
+    },
+    BadInput {
+        file: "penalty_missing.toml",
+        fragments: &["`contact.penalty`", "required"],
+        line: Some(21),
+    },
+    BadInput {
+        file: "unknown_obstacle.toml",
+        fragments: &["`obstacle[0].shape`", "\"torus\""],
+        line: Some(17),
+    },
+    BadInput {
+        file: "inverted_box.toml",
+        fragments: &["`obstacle[0].max`", "min x = 0.1 >= max x = -0.1"],
+        line: Some(19),
+    },
+    BadInput {
+        file: "zero_normal.toml",
+        fragments: &["`obstacle[0].normal`", "zero vector"],
+        line: Some(19),
+    },
+    BadInput {
         file: "unknown_key.toml",
         fragments: &["unknown field `thicknes`", "thickness"],
         line: Some(13),

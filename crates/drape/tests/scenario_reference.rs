@@ -47,6 +47,8 @@ fn readme_documents_every_scenario_key() {
         ("`[material]`", "[material]\nzzz = 1\n"),
         ("`[[load]]`", "[[load]]\nzzz = 1\n"),
         ("`[[fix]]`", "[[fix]]\nzzz = 1\n"),
+        ("`[[obstacle]]`", "[[obstacle]]\nzzz = 1\n"),
+        ("`[contact]`", "[contact]\nzzz = 1\n"),
         ("`[analysis]`", "[analysis]\nzzz = 1\n"),
         ("`[time]`", "[time]\nzzz = 1\n"),
         ("`[solver]`", "[solver]\nzzz = 1\n"),
