@@ -148,7 +148,7 @@ impl ContactModel {
                 }
             }
             a.scale = (0..3).map(|i| h[pattern.entry(d, p, i, i)]).sum::<f64>() / 3.0;
-            if !(a.scale > 0.0) {
+            if a.scale.is_nan() || a.scale <= 0.0 {
                 a.scale = 1.0;
             }
         }

@@ -56,6 +56,17 @@ pub struct ElementResults {
 }
 
 impl Model {
+    /// Current positions of element `e`'s nodes (the first
+    /// `nodes_per_element` entries).
+    #[inline]
+    fn element_positions(&self, e: usize, y: &[f64]) -> [[f64; 3]; MAX_NODES] {
+        let mut ye = [[0.0; 3]; MAX_NODES];
+        for (a, &node) in self.mesh.element(e).iter().enumerate() {
+            ye[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
+        }
+        ye
+    }
+
     /// Strain energy (returned), internal forces `f_int` (overwritten),
     /// pressure forces added to `f_ext` for the pressure `pressure` (Pa),
     /// and, if given, the Hessian values `h` (overwritten) `K - d f_p / d Y`
@@ -156,10 +167,7 @@ impl Model {
         (0..self.mesh.element_count())
             .into_par_iter()
             .map(|e| {
-                let mut ye = [[0.0; 3]; MAX_NODES];
-                for (a, &node) in self.mesh.element(e).iter().enumerate() {
-                    ye[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
-                }
+                let ye = self.element_positions(e, y);
                 let (grad, weight) = self.geometry.element(e);
                 crate::element::membrane::element_energy(
                     self.material.as_ref(),
@@ -178,10 +186,7 @@ impl Model {
         let stress: Vec<[f64; 3]> = (0..self.mesh.element_count())
             .into_par_iter()
             .map(|e| {
-                let mut ye = [[0.0; 3]; MAX_NODES];
-                for (a, &node) in self.mesh.element(e).iter().enumerate() {
-                    ye[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
-                }
+                let ye = self.element_positions(e, y);
                 let (grad, weight) = self.geometry.element(e);
                 element_stress(self.material.as_ref(), self.section, &ye[..n], grad, weight)
             })
@@ -205,10 +210,7 @@ impl Model {
         (0..self.mesh.element_count())
             .into_par_iter()
             .map(|e| {
-                let mut ye = [[0.0; 3]; MAX_NODES];
-                for (a, &node) in self.mesh.element(e).iter().enumerate() {
-                    ye[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
-                }
+                let ye = self.element_positions(e, y);
                 let (grad, weight) = self.geometry.element(e);
                 let mut least = f64::INFINITY;
                 for q in 0..weight.len() {
