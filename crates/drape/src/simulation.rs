@@ -156,6 +156,8 @@ struct StepRecord {
     cutbacks: usize,
     min_stretch: f64,
     contact: Option<ContactReport>,
+    /// Fractions of taut, wrinkled and slack elements.
+    states: [f64; 3],
 }
 
 struct Writer<'a> {
@@ -194,6 +196,9 @@ pub fn history_columns(setup: &Setup) -> Vec<String> {
             "total_energy",
             "min_stretch",
             "cutbacks",
+            "taut_fraction",
+            "wrinkled_fraction",
+            "slack_fraction",
         ]
         .map(String::from),
     );
@@ -233,6 +238,9 @@ impl Writer<'_> {
             kinetic + r.strain + contact_energy - state.external_work,
             r.min_stretch,
             r.cutbacks as f64,
+            r.states[0],
+            r.states[1],
+            r.states[2],
         ]);
         let path = self.history.path().to_path_buf();
         self.history.write_row(&row).map_err(io_err(&path))?;
@@ -264,19 +272,7 @@ impl Writer<'_> {
         let results = model.element_results(&state.positions);
         let stress: Vec<f64> = results.stress.iter().flatten().copied().collect();
         let principal: Vec<f64> = results.principal.iter().flatten().copied().collect();
-        let wrinkle: Vec<i32> = results
-            .principal
-            .iter()
-            .map(|p| {
-                if p[1] >= 0.0 {
-                    0
-                } else if p[0] > 0.0 {
-                    1
-                } else {
-                    2
-                }
-            })
-            .collect();
+        let wrinkle = &results.state;
         let rel = frame_relative_path(step as u64);
         let path = self.dir.join(&rel);
         let frame = Frame {
@@ -319,7 +315,7 @@ impl Writer<'_> {
                 DataArray {
                     name: "wrinkle_state",
                     components: 1,
-                    values: Values::I32(&wrinkle),
+                    values: Values::I32(wrinkle),
                     component_names: &[],
                 },
             ],
@@ -398,6 +394,7 @@ pub fn run(
             cutbacks: 0,
             min_stretch: model.min_stretch(&state.positions).0,
             contact: last_contact.clone(),
+            states: model.element_results(&state.positions).state_fractions(),
         },
     )?;
     writer.frame(0, &state, last_contact.as_ref())?;
@@ -441,6 +438,7 @@ pub fn run(
                                 cutbacks: depth,
                                 min_stretch: stretch,
                                 contact: last_contact.clone(),
+                                states: model.element_results(&state.positions).state_fractions(),
                             },
                         )?;
                         observer(&StepInfo {
@@ -460,7 +458,11 @@ pub fn run(
                             last_written = step;
                             since_frame = 0;
                         }
-                        if stretch < SVK_CRITICAL_STRETCH {
+                        // With a wrinkling model compression carries no
+                        // stress, and the instability does not exist.
+                        if stretch < SVK_CRITICAL_STRETCH
+                            && model.material.wrinkle_state([0.0; 3]).is_none()
+                        {
                             failure = Some(RunError::MaterialInstability {
                                 time: state.time,
                                 element,

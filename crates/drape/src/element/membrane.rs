@@ -156,8 +156,9 @@ pub fn element_force_hessian(
 }
 
 /// Mean second Piola–Kirchhoff stress `[S11, S22, S12]` over the element's
-/// quadrature points (including prestress), in the element's local frame
-/// (`e1` along `G_1`, the direction from its first to its second vertex).
+/// quadrature points (including prestress) and mean Green–Lagrange strain
+/// `[E11, E22, 2 E12]`, in the element's local frame (`e1` along `G_1`, the
+/// direction from its first to its second vertex).
 #[allow(non_snake_case)]
 pub fn element_stress(
     material: &dyn Material,
@@ -165,18 +166,23 @@ pub fn element_stress(
     y: &[[f64; 3]],
     grad: &[[f64; 2]],
     weight: &[f64],
-) -> [f64; 3] {
+) -> ([f64; 3], [f64; 3]) {
     let n = y.len();
     let mut s = [0.0; 3];
+    let mut e = [0.0; 3];
     let area: f64 = weight.iter().sum();
     for (q, w) in weight.iter().enumerate() {
         let F = deformation_gradient(y, &grad[q * n..(q + 1) * n]);
-        let sq = material.stress(green_lagrange(&F));
+        let eq = green_lagrange(&F);
+        let sq = material.stress(eq);
         s[0] += w * (sq[0] + section.prestress);
         s[1] += w * (sq[1] + section.prestress);
         s[2] += w * sq[2];
+        for i in 0..3 {
+            e[i] += w * eq[i];
+        }
     }
-    [s[0] / area, s[1] / area, s[2] / area]
+    (s.map(|v| v / area), e.map(|v| v / area))
 }
 
 /// Principal values `(s1, s2)`, `s1 >= s2`, of the symmetric 2x2 tensor

@@ -8,8 +8,10 @@
 //! and the tangent `D = ds/de` (3x3, Pa).
 
 mod svk;
+pub mod wrinkling;
 
 pub use svk::SaintVenantKirchhoff;
+pub use wrinkling::{WrinkleState, Wrinkling, WrinklingModel};
 
 /// The energy, stress and tangent at one strain.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,5 +44,11 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     /// is symmetric and Cholesky applies).
     fn has_symmetric_tangent(&self) -> bool {
         true
+    }
+    /// The wrinkling state at a strain, for models that have one; `None`
+    /// for models that carry compression (the output then classifies the
+    /// stress itself).
+    fn wrinkle_state(&self, _strain: [f64; 3]) -> Option<WrinkleState> {
+        None
     }
 }

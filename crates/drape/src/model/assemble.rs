@@ -53,6 +53,22 @@ pub struct ElementResults {
     pub stress: Vec<[f64; 3]>,
     /// Principal values `[s1, s2]`, `s1 >= s2` (Pa).
     pub principal: Vec<[f64; 2]>,
+    /// Wrinkling state: 0 taut, 1 wrinkled, 2 slack — the material's at
+    /// the mean strain, or (for a material that carries compression) the
+    /// classification of the stress' principal values.
+    pub state: Vec<i32>,
+}
+
+impl ElementResults {
+    /// Fractions of taut, wrinkled and slack elements.
+    pub fn state_fractions(&self) -> [f64; 3] {
+        let mut count = [0usize; 3];
+        for &s in &self.state {
+            count[s.clamp(0, 2) as usize] += 1;
+        }
+        let n = self.state.len().max(1) as f64;
+        count.map(|c| c as f64 / n)
+    }
 }
 
 impl Model {
@@ -183,22 +199,28 @@ impl Model {
     /// Mean stress and principal stresses of every element at positions `y`.
     pub fn element_results(&self, y: &[f64]) -> ElementResults {
         let n = self.mesh.order.nodes_per_element();
-        let stress: Vec<[f64; 3]> = (0..self.mesh.element_count())
+        let per_element: Vec<([f64; 3], [f64; 2], i32)> = (0..self.mesh.element_count())
             .into_par_iter()
             .map(|e| {
                 let ye = self.element_positions(e, y);
                 let (grad, weight) = self.geometry.element(e);
-                element_stress(self.material.as_ref(), self.section, &ye[..n], grad, weight)
+                let (s, strain) =
+                    element_stress(self.material.as_ref(), self.section, &ye[..n], grad, weight);
+                let (s1, s2) = principal_values(s);
+                let state = match self.material.wrinkle_state(strain) {
+                    Some(state) => state as i32,
+                    None if s2 >= 0.0 => 0,
+                    None if s1 > 0.0 => 1,
+                    None => 2,
+                };
+                (s, [s1, s2], state)
             })
             .collect();
-        let principal = stress
-            .iter()
-            .map(|s| {
-                let (s1, s2) = principal_values(*s);
-                [s1, s2]
-            })
-            .collect();
-        ElementResults { stress, principal }
+        ElementResults {
+            stress: per_element.iter().map(|r| r.0).collect(),
+            principal: per_element.iter().map(|r| r.1).collect(),
+            state: per_element.iter().map(|r| r.2).collect(),
+        }
     }
 }
 

@@ -9,7 +9,7 @@ use crate::contact::{ContactMethod, ContactModel, RigidBody};
 use crate::element::membrane::Section;
 use crate::integrator::Newmark;
 use crate::load::{Load, LoadKind};
-use crate::material::SaintVenantKirchhoff;
+use crate::material::{Material, SaintVenantKirchhoff, Wrinkling, WrinklingModel};
 use crate::mesh::{ElementOrder, Mesh, generate};
 use crate::model::Model;
 use crate::solver::NewtonSettings;
@@ -185,28 +185,34 @@ impl Scenario {
             c.positive("material", None, "density", m.density)?
         };
         c.finite("material", None, "prestress", &[m.prestress])?;
-        match m.wrinkling.as_str() {
-            "none" => {}
-            "stress-projection" | "relaxed-energy" => {
-                return Err(c.invalid(
-                    "material",
-                    None,
-                    "wrinkling",
-                    format!(
-                        "{:?} is not available in this version; use \"none\"",
-                        m.wrinkling
-                    ),
-                ));
+        let wrinkling = match m.wrinkling.as_str() {
+            "none" => None,
+            "stress-projection" => Some(WrinklingModel::StressProjection),
+            "relaxed-energy" => {
+                if m.prestress != 0.0 {
+                    return Err(c.invalid(
+                        "material",
+                        None,
+                        "prestress",
+                        format!(
+                            "must be 0 with wrinkling = \"relaxed-energy\" (Pipkin's relaxed energy has no prestress), not {}",
+                            m.prestress
+                        ),
+                    ));
+                }
+                Some(WrinklingModel::RelaxedEnergy)
             }
             other => {
                 return Err(c.invalid(
                     "material",
                     None,
                     "wrinkling",
-                    format!("must be \"none\" or \"stress-projection\", not {other:?}"),
+                    format!(
+                        "must be \"none\", \"stress-projection\" or \"relaxed-energy\", not {other:?}"
+                    ),
                 ));
             }
-        }
+        };
 
         let mut loads = Vec::new();
         for (i, l) in self.loads.iter().enumerate() {
@@ -383,12 +389,29 @@ impl Scenario {
             });
         }
 
+        // With a wrinkling model the prestress is part of the stress that is
+        // projected, so the material carries it.
+        let (material, prestress): (Box<dyn Material>, f64) = match wrinkling {
+            None => (
+                Box::new(SaintVenantKirchhoff::new(young, m.poisson_ratio)),
+                m.prestress,
+            ),
+            Some(model) => {
+                let w = Wrinkling::new(young, m.poisson_ratio, m.prestress, model);
+                let w = if is_static {
+                    w.with_slack_tangent(1e-6)
+                } else {
+                    w
+                };
+                (Box::new(w), 0.0)
+            }
+        };
         let model = Model::new(
             mesh,
-            Box::new(SaintVenantKirchhoff::new(young, m.poisson_ratio)),
+            material,
             Section {
                 thickness,
-                prestress: m.prestress,
+                prestress,
             },
             density,
             loads,
