@@ -44,7 +44,8 @@ impl DynamicWorkspace {
     pub fn new(model: &Model) -> Result<Self, crate::solver::LinearSolveError> {
         let n = model.dofs();
         let linear =
-            crate::solver::LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx)?;
+            crate::solver::LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx)?
+                .with_transpose(model.pattern.transpose_map().to_vec());
         Ok(Self {
             q: vec![0.0; n],
             mq: vec![0.0; n],

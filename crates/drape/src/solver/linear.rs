@@ -30,6 +30,9 @@ pub enum Factorization {
     Cholesky,
     /// Sparse LU with partial pivoting.
     Lu,
+    /// GMRES preconditioned by the Cholesky factor of the symmetric part
+    /// `(A + A^T) / 2`.
+    PreconditionedGmres,
 }
 
 /// A linear solve that could not be done.
@@ -56,6 +59,31 @@ pub struct LinearSolver {
     memory_req: StackReq,
     rhs: Mat<f64>,
     par: Par,
+    /// Mirror of each stored entry (structurally symmetric patterns), for
+    /// the preconditioned Krylov path.
+    transpose: Option<Vec<usize>>,
+    /// Work space of the Krylov path.
+    krylov: Krylov,
+    /// Krylov iterations of the last solve (0 for direct solves).
+    pub last_krylov_iterations: usize,
+}
+
+struct Krylov {
+    symmetric_part: Vec<f64>,
+    basis: Vec<Vec<f64>>,
+    work: Mat<f64>,
+    z: Vec<f64>,
+}
+
+impl Default for Krylov {
+    fn default() -> Self {
+        Self {
+            symmetric_part: Vec::new(),
+            basis: Vec::new(),
+            work: Mat::zeros(0, 0),
+            z: Vec::new(),
+        }
+    }
 }
 
 impl std::fmt::Debug for LinearSolver {
@@ -86,7 +114,18 @@ impl LinearSolver {
             // A second thread does not speed up faer's sparse factorisation
             // at these sizes (FACTS.md); the threads serve assembly.
             par: Par::Seq,
+            transpose: None,
+            krylov: Krylov::default(),
+            last_krylov_iterations: 0,
         })
+    }
+
+    /// Enables the preconditioned Krylov path for non-symmetric matrices
+    /// on a structurally symmetric pattern: `transpose[k]` is the value
+    /// index of the entry mirrored about the diagonal of entry `k`.
+    pub fn with_transpose(mut self, transpose: Vec<usize>) -> Self {
+        self.transpose = Some(transpose);
+        self
     }
 
     /// Entries of the Cholesky factor `L`, once it has been analysed.
@@ -117,17 +156,28 @@ impl LinearSolver {
         rhs: &mut [f64],
     ) -> Result<Factorization, LinearSolveError> {
         let n = self.dimension();
+        self.last_krylov_iterations = 0;
         for (i, v) in rhs.iter().enumerate() {
             self.rhs[(i, 0)] = *v;
         }
-        let used = if symmetric && self.solve_cholesky(values)? {
-            Factorization::Cholesky
-        } else {
-            for (i, v) in rhs.iter().enumerate() {
-                self.rhs[(i, 0)] = *v;
+        let mut used = None;
+        if symmetric {
+            if self.factor_cholesky(values)? {
+                self.cholesky_solve_rhs();
+                used = Some(Factorization::Cholesky);
             }
-            self.solve_lu(values)?;
-            Factorization::Lu
+        } else if self.transpose.is_some() && self.gmres(values, rhs)? {
+            used = Some(Factorization::PreconditionedGmres);
+        }
+        let used = match used {
+            Some(u) => u,
+            None => {
+                for (i, v) in rhs.iter().enumerate() {
+                    self.rhs[(i, 0)] = *v;
+                }
+                self.solve_lu(values)?;
+                Factorization::Lu
+            }
         };
         // A (numerically) singular matrix can factorise without error and
         // return garbage: check the solution's residual, `O(nnz)`.
@@ -148,6 +198,7 @@ impl LinearSolver {
                     match used {
                         Factorization::Cholesky => "Cholesky",
                         Factorization::Lu => "LU",
+                        Factorization::PreconditionedGmres => "preconditioned GMRES",
                     },
                     residual / b_norm
                 ),
@@ -170,8 +221,9 @@ impl LinearSolver {
         r.iter().map(|v| v * v).sum::<f64>().sqrt()
     }
 
-    /// Returns `Ok(false)` when the matrix is not positive definite.
-    fn solve_cholesky(&mut self, values: &[f64]) -> Result<bool, LinearSolveError> {
+    /// Factorises `values` (lower triangle read) by Cholesky into the kept
+    /// storage; `Ok(false)` when the matrix is not positive definite.
+    fn factor_cholesky(&mut self, values: &[f64]) -> Result<bool, LinearSolveError> {
         if self.llt.is_none() {
             let symb = factorize_symbolic_cholesky(
                 self.symbolic.as_ref(),
@@ -193,7 +245,7 @@ impl LinearSolver {
         let (symb, l) = self.llt.as_mut().expect("set above");
         let a = SparseColMatRef::new(self.symbolic.as_ref(), values);
         let stack = MemStack::new(&mut self.memory);
-        if symb
+        Ok(symb
             .factorize_numeric_llt::<f64>(
                 l,
                 a,
@@ -203,17 +255,184 @@ impl LinearSolver {
                 stack,
                 Default::default(),
             )
-            .is_err()
-        {
-            return Ok(false);
-        }
+            .is_ok())
+    }
+
+    /// `self.rhs <- L^-T L^-1 self.rhs` with the current Cholesky factor.
+    fn cholesky_solve_rhs(&mut self) {
+        let mut rhs = std::mem::replace(&mut self.rhs, Mat::zeros(0, 0));
+        self.cholesky_solve(&mut rhs);
+        self.rhs = rhs;
+    }
+
+    fn cholesky_solve(&mut self, x: &mut Mat<f64>) {
+        let par = self.par;
+        let (symb, l) = self.llt.as_ref().expect("factorised before");
+        let stack = MemStack::new(&mut self.memory);
         LltRef::<usize, f64>::new(symb, l).solve_in_place_with_conj(
             Conj::No,
-            self.rhs.as_mut(),
+            x.as_mut(),
             par,
             stack,
         );
-        Ok(true)
+    }
+
+    /// `out = A x` on the pattern.
+    fn matvec(&self, values: &[f64], x: &[f64], out: &mut [f64]) {
+        out.fill(0.0);
+        let (col_ptr, row_idx) = (self.symbolic.col_ptr(), self.symbolic.row_idx());
+        for c in 0..self.dimension() {
+            let xc = x[c];
+            if xc != 0.0 {
+                for k in col_ptr[c]..col_ptr[c + 1] {
+                    out[row_idx[k]] += values[k] * xc;
+                }
+            }
+        }
+    }
+
+    /// Restarted GMRES, right-preconditioned by the Cholesky factor `P` of
+    /// the symmetric part `(A + A^T) / 2`: solves `A P^-1 u = b`, `x = P^-1
+    /// u`, to `|b - A x| <= 1e-12 |b|`, so that the result equals a direct
+    /// solve's to well within Newton's tolerance. When the skew part of `A`
+    /// is small against the symmetric part (the wrinkling tangent next to
+    /// the mass term), few iterations are needed. Returns `Ok(false)` (the
+    /// caller then uses LU) when the symmetric part is not positive
+    /// definite or GMRES has not converged in 100 iterations. The solution
+    /// is left in `self.rhs`.
+    fn gmres(&mut self, values: &[f64], b: &[f64]) -> Result<bool, LinearSolveError> {
+        const RESTART: usize = 25;
+        const MAX_ITERATIONS: usize = 100;
+        let n = self.dimension();
+        let transpose = self.transpose.take().expect("checked by the caller");
+        let mut sym = std::mem::take(&mut self.krylov.symmetric_part);
+        sym.resize(values.len(), 0.0);
+        for (k, s) in sym.iter_mut().enumerate() {
+            *s = 0.5 * (values[k] + values[transpose[k]]);
+        }
+        self.transpose = Some(transpose);
+        let ok = self.factor_cholesky(&sym)?;
+        self.krylov.symmetric_part = sym;
+        if !ok {
+            return Ok(false);
+        }
+        let b_norm = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let mut x = vec![0.0; n];
+        if b_norm == 0.0 {
+            self.rhs.as_mut().fill(0.0);
+            return Ok(true);
+        }
+        let mut basis = std::mem::take(&mut self.krylov.basis);
+        basis.resize_with(RESTART + 1, || vec![0.0; n]);
+        let mut work = std::mem::replace(&mut self.krylov.work, Mat::zeros(0, 0));
+        if work.nrows() != n {
+            work = Mat::zeros(n, 1);
+        }
+        let mut r = vec![0.0; n];
+        let mut ax = vec![0.0; n];
+        let mut iterations = 0;
+        let mut converged = false;
+        while iterations < MAX_ITERATIONS && !converged {
+            // r = b - A x
+            self.matvec(values, &x, &mut ax);
+            for i in 0..n {
+                r[i] = b[i] - ax[i];
+            }
+            let beta = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if beta <= 1e-12 * b_norm {
+                converged = true;
+                break;
+            }
+            for i in 0..n {
+                basis[0][i] = r[i] / beta;
+            }
+            let mut h = vec![[0.0f64; RESTART + 1]; RESTART];
+            let (mut cs, mut sn) = ([0.0f64; RESTART], [0.0f64; RESTART]);
+            let mut g = [0.0f64; RESTART + 1];
+            g[0] = beta;
+            let mut k_used = 0;
+            for k in 0..RESTART {
+                // w = A P^-1 v_k
+                for i in 0..n {
+                    work[(i, 0)] = basis[k][i];
+                }
+                self.cholesky_solve(&mut work);
+                let mut z = std::mem::take(&mut self.krylov.z);
+                z.clear();
+                z.extend((0..n).map(|i| work[(i, 0)]));
+                let (head, tail) = basis.split_at_mut(k + 1);
+                let w = &mut tail[0];
+                self.matvec(values, &z, w);
+                self.krylov.z = z;
+                for (j, vj) in head.iter().enumerate() {
+                    let hj = vj.iter().zip(w.iter()).map(|(a, c)| a * c).sum::<f64>();
+                    h[k][j] = hj;
+                    for i in 0..n {
+                        w[i] -= hj * vj[i];
+                    }
+                }
+                let norm_w = w.iter().map(|v| v * v).sum::<f64>().sqrt();
+                h[k][k + 1] = norm_w;
+                if norm_w > 0.0 {
+                    for v in w.iter_mut() {
+                        *v /= norm_w;
+                    }
+                }
+                for j in 0..k {
+                    let t = cs[j] * h[k][j] + sn[j] * h[k][j + 1];
+                    h[k][j + 1] = -sn[j] * h[k][j] + cs[j] * h[k][j + 1];
+                    h[k][j] = t;
+                }
+                let d = (h[k][k] * h[k][k] + h[k][k + 1] * h[k][k + 1]).sqrt();
+                (cs[k], sn[k]) = if d > 0.0 {
+                    (h[k][k] / d, h[k][k + 1] / d)
+                } else {
+                    (1.0, 0.0)
+                };
+                h[k][k] = d;
+                h[k][k + 1] = 0.0;
+                g[k + 1] = -sn[k] * g[k];
+                g[k] *= cs[k];
+                iterations += 1;
+                k_used = k + 1;
+                if g[k + 1].abs() <= 1e-12 * b_norm || iterations >= MAX_ITERATIONS {
+                    break;
+                }
+            }
+            // Solve the triangular system, x += P^-1 V y.
+            let mut y = [0.0f64; RESTART];
+            for j in (0..k_used).rev() {
+                let mut s = g[j];
+                for l in j + 1..k_used {
+                    s -= h[l][j] * y[l];
+                }
+                y[j] = s / h[j][j];
+            }
+            for i in 0..n {
+                work[(i, 0)] = (0..k_used).map(|j| basis[j][i] * y[j]).sum();
+            }
+            self.cholesky_solve(&mut work);
+            for i in 0..n {
+                x[i] += work[(i, 0)];
+            }
+        }
+        if !converged {
+            self.matvec(values, &x, &mut ax);
+            let res = b
+                .iter()
+                .zip(&ax)
+                .map(|(p, q)| (p - q) * (p - q))
+                .sum::<f64>()
+                .sqrt();
+            converged = res <= 1e-10 * b_norm;
+        }
+        self.krylov.basis = basis;
+        self.krylov.work = work;
+        self.last_krylov_iterations = iterations;
+        for i in 0..n {
+            self.rhs[(i, 0)] = x[i];
+        }
+        Ok(converged && x.iter().all(|v| v.is_finite()))
     }
 
     fn solve_lu(&mut self, values: &[f64]) -> Result<(), LinearSolveError> {

@@ -148,6 +148,11 @@ impl SparsePattern {
         self.transpose[k]
     }
 
+    /// `transpose_of` for every entry.
+    pub fn transpose_map(&self) -> &[usize] {
+        &self.transpose
+    }
+
     /// Value index of the diagonal entry of DOF `d`.
     #[inline]
     pub fn diagonal_of(&self, d: usize) -> usize {
