@@ -167,7 +167,7 @@ fn run(
             text.push_str(&format!("[[monitor]]\nname = \"{name}\"\nat = {at}\n"));
         }
     }
-    text.push_str("\n");
+    text.push('\n');
     let text = text.replace("every = 10 ", "every = 100000 ");
     let s = setup(&text);
     let dir = temp_dir(&format!("wr-{example}-{wrinkling}"));
