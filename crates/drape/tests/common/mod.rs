@@ -5,14 +5,37 @@ use drape::scenario::{Scenario, Setup};
 use std::path::{Path, PathBuf};
 
 /// A fresh, empty directory under the system's temp dir, unique to this
-/// call (tests run in parallel threads of one process).
-pub fn temp_dir(name: &str) -> PathBuf {
+/// call (tests run in parallel threads of one process), removed when
+/// dropped.
+pub fn temp_dir(name: &str) -> TempDir {
     static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let k = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let dir = std::env::temp_dir().join(format!("drape-test-{}-{k}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    dir
+    TempDir(dir)
+}
+
+/// A directory removed when dropped.
+pub struct TempDir(PathBuf);
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for TempDir {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
 }
 
 /// Builds a setup from scenario text.
