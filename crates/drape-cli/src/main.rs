@@ -6,10 +6,12 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use drape::scenario::{Scenario, ScenarioError, Setup};
-use drape::simulation::{self, RunError, StepInfo};
-use std::io::{IsTerminal, Write};
+use drape::simulation::{self, RunControl, RunError, StepInfo};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 mod examples;
@@ -30,15 +32,28 @@ enum Command {
     /// Progress (step, time, Newton iterations) goes to the terminal; the
     /// exit code is 1 when the run fails (everything computed so far is
     /// kept) and 2 when the scenario is invalid.
+    ///
+    /// Ctrl-C or SIGTERM ends the current step, writes a checkpoint and the
+    /// summary (status "interrupted") and exits with code 130; `--resume
+    /// DIR` continues from the newest checkpoint in DIR, and refuses if
+    /// the scenario has changed.
     Run {
-        /// The scenario file (TOML).
-        scenario: PathBuf,
+        /// The scenario file (TOML); with --resume, defaults to the one the
+        /// run was started with.
+        #[arg(required_unless_present = "resume")]
+        scenario: Option<PathBuf>,
         /// Output directory [default: ./out/<scenario stem>].
-        #[arg(long)]
+        #[arg(long, conflicts_with = "resume")]
         out: Option<PathBuf>,
+        /// Continue the run in DIR from its checkpoint.
+        #[arg(long, value_name = "DIR")]
+        resume: Option<PathBuf>,
         /// Print nothing but errors.
-        #[arg(long, short)]
+        #[arg(long, short, conflicts_with = "verbose")]
         quiet: bool,
+        /// Print a line for every step (not only a progress bar).
+        #[arg(long, short)]
+        verbose: bool,
     },
     /// Validate a scenario and summarise it (mesh, loads, schedule) without running it.
     Check {
@@ -55,10 +70,11 @@ enum Command {
     },
 }
 
-/// An input error (exit 2) or a run failure (exit 1).
+/// An input error (exit 2), a run failure (exit 1) or an interruption (130).
 enum Failure {
     Input(anyhow::Error),
     Run(anyhow::Error),
+    Interrupted(anyhow::Error),
 }
 
 impl From<ScenarioError> for Failure {
@@ -73,8 +89,10 @@ fn main() -> ExitCode {
         Command::Run {
             scenario,
             out,
+            resume,
             quiet,
-        } => run(&scenario, out, quiet),
+            verbose,
+        } => run(scenario, out, resume, quiet, verbose),
         Command::Check { scenario } => check(&scenario),
         Command::Example { name, write } => example(name.as_deref(), write.as_deref()),
     };
@@ -87,6 +105,10 @@ fn main() -> ExitCode {
         Err(Failure::Run(e)) => {
             eprintln!("error: {e:#}");
             ExitCode::from(1)
+        }
+        Err(Failure::Interrupted(e)) => {
+            eprintln!("{e:#}");
+            ExitCode::from(130)
         }
     }
 }
@@ -137,18 +159,55 @@ fn check(path: &Path) -> Result<(), Failure> {
     Ok(())
 }
 
-fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), Failure> {
+fn run(
+    scenario: Option<PathBuf>,
+    out: Option<PathBuf>,
+    resume: Option<PathBuf>,
+    quiet: bool,
+    verbose: bool,
+) -> Result<(), Failure> {
+    let path = match (&scenario, &resume) {
+        (Some(p), _) => p.clone(),
+        (None, Some(dir)) => started_with(dir)?,
+        (None, None) => unreachable!("clap requires one of them"),
+    };
+    let path = path.as_path();
     let setup = load(path)?;
-    let out = out.unwrap_or_else(|| {
+    let out = resume.clone().or(out).unwrap_or_else(|| {
         let stem = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "run".into());
         PathBuf::from("out").join(stem)
     });
+    if resume.is_none() {
+        // Remember the scenario, for --resume and for readers of the outputs.
+        std::fs::create_dir_all(&out)
+            .and_then(|()| std::fs::copy(path, out.join("scenario.toml")).map(|_| ()))
+            .and_then(|()| {
+                let abs = std::fs::canonicalize(path)?;
+                std::fs::write(out.join("scenario.path"), abs.to_string_lossy().as_bytes())
+            })
+            .with_context(|| format!("cannot write into {}", out.display()))
+            .map_err(Failure::Run)?;
+    }
+    static STOP: AtomicBool = AtomicBool::new(false);
+    // A second Ctrl-C while the step finishes does nothing more; the
+    // handler can only be set once per process.
+    let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
     let terminal = std::io::stderr().is_terminal();
     let start = Instant::now();
     let mut last_print = Instant::now();
+    let bar = (terminal && !quiet).then(|| {
+        let bar = ProgressBar::new(1000);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{bar:30.cyan/blue} t = {msg} [{elapsed_precise} elapsed, {eta} left]",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        bar
+    });
     let mut observer = |info: &StepInfo| {
         if quiet {
             return;
@@ -168,19 +227,37 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), Failure> {
             info.kinetic_energy,
             info.strain_energy
         );
-        if terminal {
-            eprint!("\r{line}");
-            let _ = std::io::stderr().flush();
-        } else if last_print.elapsed().as_secs_f64() >= 1.0
+        if let Some(bar) = &bar {
+            bar.set_position((1000.0 * info.time / info.end_time).round() as u64);
+            bar.set_message(format!(
+                "{:.4e} s, step {}, Newton {}{}",
+                info.time,
+                info.step,
+                info.iterations,
+                if info.cutbacks > 0 {
+                    format!(", cut back x{}", info.cutbacks)
+                } else {
+                    String::new()
+                }
+            ));
+            if verbose {
+                bar.println(&line);
+            }
+        } else if verbose
+            || last_print.elapsed().as_secs_f64() >= 1.0
             || info.time >= info.end_time * (1.0 - 1e-12)
         {
             eprintln!("{line}");
             last_print = Instant::now();
         }
     };
-    let result = simulation::run(&setup, &out, &mut observer);
-    if terminal && !quiet {
-        eprintln!();
+    let control = RunControl {
+        stop: Some(&STOP),
+        resume: resume.is_some(),
+    };
+    let result = simulation::run_with(&setup, &out, &mut observer, control);
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
     }
     match result {
         Ok(summary) => {
@@ -207,11 +284,26 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), Failure> {
             }
             Ok(())
         }
+        Err(e @ RunError::Interrupted { .. }) => Err(Failure::Interrupted(anyhow::Error::new(e))),
+        Err(e @ RunError::Resume(_)) => Err(Failure::Input(anyhow::Error::new(e))),
         Err(e @ RunError::Io { .. }) => Err(Failure::Run(anyhow::Error::new(e))),
         Err(e) => Err(Failure::Run(
             anyhow::Error::new(e).context(format!("run of {} failed", path.display())),
         )),
     }
+}
+
+/// The scenario a run in `dir` was started with (`dir/scenario.path`).
+fn started_with(dir: &Path) -> Result<PathBuf, Failure> {
+    let file = dir.join("scenario.path");
+    let text = std::fs::read_to_string(&file).map_err(|e| {
+        Failure::Input(anyhow::anyhow!(
+            "{}: {e}; is {} the output directory of a drape run? (or name the scenario: drape run SCENARIO --resume DIR)",
+            file.display(),
+            dir.display()
+        ))
+    })?;
+    Ok(PathBuf::from(text.trim()))
 }
 
 fn example(name: Option<&str>, write: Option<&Path>) -> Result<(), Failure> {

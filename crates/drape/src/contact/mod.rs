@@ -213,6 +213,10 @@ impl ContactModel {
                     (a, ma.min(mb))
                 },
             );
+        // A fixed order, whatever the threads did: sums over pairs are
+        // then reproducible to the bit.
+        let mut pairs = pairs;
+        pairs.sort_unstable_by_key(|(p, k, _)| (*p, *k));
         (pairs, min_gap)
     }
 

@@ -27,6 +27,9 @@ impl Shared {
     }
 }
 
+/// Elements per parallel work item.
+const CHUNK: usize = 256;
+
 /// Per-thread scratch for one element.
 struct Local {
     y: [[f64; 3]; MAX_NODES],
@@ -111,88 +114,104 @@ impl Model {
         let material = self.material.as_ref();
         let mut energy = 0.0;
         for colour in &self.colours {
+            // Fixed chunks, their partial energies summed in order: the
+            // result does not depend on how rayon schedules the work
+            // (resumed runs reproduce uninterrupted ones to the bit).
             energy += colour
-                .par_iter()
-                .map_init(Local::new, |local, &e| {
-                    let el = self.mesh.element(e);
-                    for (a, &node) in el.iter().enumerate() {
-                        local.y[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
-                    }
-                    let (grad, weight) = self.geometry.element(e);
-                    let k = want_h.then_some(&mut local.k[..m * m]);
-                    let u = element_force_hessian(
-                        material,
-                        self.section,
-                        &local.y[..n],
-                        grad,
-                        weight,
-                        &mut local.f[..m],
-                        k,
-                    );
-                    if pressure != 0.0 {
-                        local.fp[..m].fill(0.0);
-                        let k = want_h.then_some(&mut local.k[..m * m]);
-                        add_pressure_force(
-                            pressure,
-                            &local.y[..n],
-                            &self.pressure_quadrature,
-                            &mut local.fp[..m],
-                            k,
-                            -1.0,
-                        );
-                    }
-                    // SAFETY: the elements of one colour share no node, so
-                    // the entries written below are disjoint across threads.
-                    unsafe {
+                .par_chunks(CHUNK)
+                .map_init(Local::new, |local, chunk| {
+                    let mut sum = 0.0;
+                    for &e in chunk {
+                        let el = self.mesh.element(e);
                         for (a, &node) in el.iter().enumerate() {
-                            for i in 0..3 {
-                                fi.add(3 * node + i, local.f[3 * a + i]);
-                                if pressure != 0.0 {
-                                    fe.add(3 * node + i, local.fp[3 * a + i]);
+                            local.y[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
+                        }
+                        let (grad, weight) = self.geometry.element(e);
+                        let k = want_h.then_some(&mut local.k[..m * m]);
+                        let u = element_force_hessian(
+                            material,
+                            self.section,
+                            &local.y[..n],
+                            grad,
+                            weight,
+                            &mut local.f[..m],
+                            k,
+                        );
+                        if pressure != 0.0 {
+                            local.fp[..m].fill(0.0);
+                            let k = want_h.then_some(&mut local.k[..m * m]);
+                            add_pressure_force(
+                                pressure,
+                                &local.y[..n],
+                                &self.pressure_quadrature,
+                                &mut local.fp[..m],
+                                k,
+                                -1.0,
+                            );
+                        }
+                        // SAFETY: the elements of one colour share no node, so
+                        // the entries written below are disjoint across threads.
+                        unsafe {
+                            for (a, &node) in el.iter().enumerate() {
+                                for i in 0..3 {
+                                    fi.add(3 * node + i, local.f[3 * a + i]);
+                                    if pressure != 0.0 {
+                                        fe.add(3 * node + i, local.fp[3 * a + i]);
+                                    }
                                 }
                             }
-                        }
-                        if want_h {
-                            let blocks = &self.element_blocks[e * n * n..(e + 1) * n * n];
-                            for a in 0..n {
-                                for (b, &node_b) in el.iter().enumerate() {
-                                    let p = blocks[a * n + b];
-                                    for i in 0..3 {
-                                        let row = (3 * a + i) * m + 3 * b;
-                                        for j in 0..3 {
-                                            h_ptr.add(
-                                                self.pattern.entry(p, node_b, i, j),
-                                                local.k[row + j],
-                                            );
+                            if want_h {
+                                let blocks = &self.element_blocks[e * n * n..(e + 1) * n * n];
+                                for a in 0..n {
+                                    for (b, &node_b) in el.iter().enumerate() {
+                                        let p = blocks[a * n + b];
+                                        for i in 0..3 {
+                                            let row = (3 * a + i) * m + 3 * b;
+                                            for j in 0..3 {
+                                                h_ptr.add(
+                                                    self.pattern.entry(p, node_b, i, j),
+                                                    local.k[row + j],
+                                                );
+                                            }
                                         }
                                     }
                                 }
                             }
                         }
+                        sum += u;
                     }
-                    u
+                    sum
                 })
+                .collect::<Vec<f64>>()
+                .iter()
                 .sum::<f64>();
         }
         energy
     }
 
-    /// Strain energy only (J).
+    /// Strain energy only (J), summed deterministically.
     pub fn strain_energy(&self, y: &[f64]) -> f64 {
         let n = self.mesh.order.nodes_per_element();
-        (0..self.mesh.element_count())
+        let count = self.mesh.element_count();
+        (0..count.div_ceil(CHUNK))
             .into_par_iter()
-            .map(|e| {
-                let ye = self.element_positions(e, y);
-                let (grad, weight) = self.geometry.element(e);
-                crate::element::membrane::element_energy(
-                    self.material.as_ref(),
-                    self.section,
-                    &ye[..n],
-                    grad,
-                    weight,
-                )
+            .map(|c| {
+                (c * CHUNK..((c + 1) * CHUNK).min(count))
+                    .map(|e| {
+                        let ye = self.element_positions(e, y);
+                        let (grad, weight) = self.geometry.element(e);
+                        crate::element::membrane::element_energy(
+                            self.material.as_ref(),
+                            self.section,
+                            &ye[..n],
+                            grad,
+                            weight,
+                        )
+                    })
+                    .sum::<f64>()
             })
+            .collect::<Vec<f64>>()
+            .iter()
             .sum()
     }
 

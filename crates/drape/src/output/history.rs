@@ -76,6 +76,48 @@ impl HistoryWriter {
     /// `InvalidInput` for bad column names (see [`HistoryWriter::create`]);
     /// `InvalidData` if the header in the file differs from `columns`;
     /// otherwise any I/O error (`NotFound` if the file does not exist).
+    /// Reopens the history of a run resumed from a checkpoint: checks the
+    /// header, keeps the first `rows` data rows (those up to the
+    /// checkpoint; a crash may have left more) and appends after them.
+    pub fn resume(path: &Path, columns: &[String], rows: usize) -> io::Result<Self> {
+        let expected = header_line(columns)?;
+        let content = std::fs::read(path)?;
+        let mut lines = content.split_inclusive(|&b| b == b'\n');
+        let header = lines.next().unwrap_or_default();
+        if header.strip_suffix(b"\n").unwrap_or(header)
+            != expected.trim_end_matches('\n').as_bytes()
+        {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!(
+                    "history file {} does not have the expected header",
+                    path.display()
+                ),
+            ));
+        }
+        let kept: Vec<&[u8]> = lines.filter(|l| l.ends_with(b"\n")).take(rows).collect();
+        if kept.len() < rows {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!(
+                    "history file {} has {} complete rows, the checkpoint needs {rows}",
+                    path.display(),
+                    kept.len()
+                ),
+            ));
+        }
+        super::atomic::write_atomic_with(path, |w| {
+            w.write_all(header)?;
+            for l in kept {
+                w.write_all(l)?;
+            }
+            Ok(())
+        })?;
+        Self::open(path, columns)
+    }
+
+    /// Reopens an existing history for appending (see [`HistoryWriter::resume`]
+    /// to cut it back to a checkpoint).
     pub fn open_append(path: &Path, columns: &[String]) -> io::Result<Self> {
         let expected = header_line(columns)?;
         let mut file = OpenOptions::new().read(true).write(true).open(path)?;

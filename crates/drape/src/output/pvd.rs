@@ -37,6 +37,17 @@ impl PvdWriter {
         }
     }
 
+    /// A collection resumed from a checkpoint: exactly `entries` (the
+    /// frames written up to the checkpoint), written at once.
+    pub fn resume(path: impl Into<PathBuf>, entries: Vec<(f64, String)>) -> io::Result<Self> {
+        let writer = Self {
+            path: path.into(),
+            entries,
+        };
+        writer.write()?;
+        Ok(writer)
+    }
+
     /// Adds the frame `relative_file` (relative to the directory of the
     /// collection file, `/`-separated, e.g. from [`frame_relative_path`]) at
     /// `time`, then rewrites the collection file atomically.

@@ -62,6 +62,22 @@ pub struct Setup {
     pub output_every: usize,
     /// Monitored nodes.
     pub monitors: Vec<Monitor>,
+    /// Write a checkpoint every this many scheduled steps (0: never).
+    pub checkpoint_every: usize,
+    /// The scenario file (absolute when it could be resolved).
+    pub scenario_path: PathBuf,
+    /// FNV-1a hash of the scenario text: a resumed run refuses a changed scenario.
+    pub scenario_hash: u64,
+}
+
+/// 64-bit FNV-1a of `bytes`: stable across platforms and Rust versions.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in bytes {
+        h ^= u64::from(*b);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
 }
 
 struct Checker<'a> {
@@ -423,6 +439,9 @@ impl Scenario {
             message: e.to_string(),
         })?;
         let mut model = model;
+        if let Some(contact) = &contact {
+            check_initial_penetration(&c, &model.mesh, contact)?;
+        }
         model.contact = contact;
         let title = self.title.clone().unwrap_or_else(|| {
             file.file_stem()
@@ -441,6 +460,9 @@ impl Scenario {
             max_cutbacks: s.max_cutbacks,
             output_every: self.output.every,
             monitors,
+            checkpoint_every: self.output.checkpoint_every,
+            scenario_path: std::fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf()),
+            scenario_hash: fnv1a(source.as_bytes()),
         })
     }
 }
@@ -611,6 +633,42 @@ fn build_contact(
         bodies.push(RigidBody { shape, velocity });
     }
     Ok(Some(ContactModel { bodies, method }))
+}
+
+/// Rejects a fabric that starts inside an obstacle by more than 1e-3 of
+/// its size: contact would fling it out in the first step (a node sitting
+/// on a surface, or a hair inside, is fine).
+fn check_initial_penetration(
+    c: &Checker,
+    mesh: &Mesh,
+    contact: &ContactModel,
+) -> Result<(), ScenarioError> {
+    let (lo, hi) = mesh.bounding_box();
+    let size = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt();
+    for (k, body) in contact.bodies.iter().enumerate() {
+        let deepest = mesh
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(p, x)| (p, body.proximity(*x, 0.0, None).gap))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((p, gap)) = deepest
+            && gap < -1e-3 * size
+        {
+            return Err(c.invalid(
+                "obstacle",
+                Some(k),
+                "shape",
+                format!(
+                    "({}) starts interpenetrating the fabric: node {p} at {:?} is {:.4e} m inside it; move the obstacle or the mesh",
+                    body.shape.describe(),
+                    mesh.nodes[p],
+                    -gap
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The fillet radius of a box or cylinder whose smallest dimension is

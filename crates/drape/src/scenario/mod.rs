@@ -10,7 +10,7 @@
 mod build;
 mod locate;
 
-pub use build::{Analysis, Monitor, Setup, read_mesh_file};
+pub use build::{Analysis, Monitor, Setup, fnv1a, read_mesh_file};
 
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -393,12 +393,17 @@ pub struct OutputSpec {
     /// and the last step are always written.
     #[serde(default = "default_every")]
     pub every: usize,
+    /// Write a checkpoint (the full state, to resume from) every N
+    /// scheduled steps; 0 (default): only when interrupted.
+    #[serde(default)]
+    pub checkpoint_every: usize,
 }
 
 impl Default for OutputSpec {
     fn default() -> Self {
         Self {
             every: default_every(),
+            checkpoint_every: 0,
         }
     }
 }

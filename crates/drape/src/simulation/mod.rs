@@ -9,6 +9,9 @@
 //! every converged step, and `summary.json` says `"failed"` and why.
 
 use crate::contact::ContactReport;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+mod checkpoint;
 use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
 use crate::integrator::{State, StaticStepper};
 use crate::output::atomic::write_atomic;
@@ -17,6 +20,7 @@ use crate::output::pvd::{PvdWriter, frame_relative_path};
 use crate::output::vtu::{DataArray, Frame, Values, write_vtu};
 use crate::scenario::{Analysis, Setup};
 use crate::solver::NewtonError;
+pub use checkpoint::{Checkpoint, CheckpointError, Counters};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -53,7 +57,7 @@ pub struct StepInfo {
 /// `summary.json`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Summary {
-    /// `"completed"` or `"failed"`.
+    /// `"completed"`, `"failed"` or `"interrupted"`.
     pub status: String,
     /// Human-readable outcome.
     pub message: String,
@@ -138,6 +142,15 @@ pub enum RunError {
     /// The linear solver could not even be set up.
     #[error("{0}")]
     Setup(String),
+    /// Stopped on request (Ctrl-C, SIGTERM) after a step; a checkpoint was written.
+    #[error("{message}")]
+    Interrupted {
+        /// What was done and how to resume.
+        message: String,
+    },
+    /// The checkpoint, history or collection to resume from is unusable.
+    #[error("cannot resume: {0}")]
+    Resume(String),
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
@@ -327,12 +340,43 @@ impl Writer<'_> {
     }
 }
 
+/// How a run is controlled from outside.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct RunControl<'a> {
+    /// Set (e.g. by a signal handler) to stop after the current step: a
+    /// checkpoint and the summary (`"interrupted"`) are written.
+    pub stop: Option<&'a AtomicBool>,
+    /// Continue from the checkpoint in the output directory.
+    pub resume: bool,
+}
+
+/// The checkpoint file in an output directory.
+pub fn checkpoint_path(out: &Path) -> PathBuf {
+    out.join("checkpoint.bin")
+}
+
 /// Runs a scenario into `out`, calling `observer` after each converged
 /// step. Writes `summary.json` in every case; returns it on success.
 pub fn run(
     setup: &Setup,
     out: &Path,
     observer: &mut dyn FnMut(&StepInfo),
+) -> Result<Summary, RunError> {
+    run_with(setup, out, observer, RunControl::default())
+}
+
+/// [`run`] with external control: interruption and resumption.
+///
+/// A resumed run continues from `out/checkpoint.bin`: the history is cut
+/// back to the checkpoint's rows, the ParaView collection to its frames,
+/// and the run goes on exactly as the uninterrupted run would have — the
+/// same history and final state to the last bit (assembly and solvers are
+/// deterministic: parallel sums use fixed chunks, summed in order).
+pub fn run_with(
+    setup: &Setup,
+    out: &Path,
+    observer: &mut dyn FnMut(&StepInfo),
+    control: RunControl,
 ) -> Result<Summary, RunError> {
     let start = Instant::now();
     let model = &setup.model;
@@ -343,39 +387,14 @@ pub fn run(
     };
     let x = model.initial_positions();
     let length = reference_length(&x);
-    let (mut state, schedule, end_time): (State, Vec<(usize, f64)>, f64) = match &setup.analysis {
-        Analysis::Dynamic { newmark, segments } => {
-            let s = match newmark.initial_state(model, &mut ws) {
-                Ok(s) => s,
-                Err(e) => {
-                    let message = format!(
-                        "the initial acceleration M^-1 (F_ext - F_int) cannot be computed: {e}"
-                    );
-                    return Err(setup_failure(setup, out, start, message));
-                }
-            };
-            let end = segments.iter().map(|(n, dt)| *n as f64 * dt).sum();
-            (s, segments.clone(), end)
-        }
-        Analysis::Static { steps } => {
-            ws.f_ext.fill(0.0);
-            (
-                State::at_rest(model, x.clone()),
-                vec![(*steps, 1.0 / *steps as f64)],
-                1.0,
-            )
-        }
+    let (schedule, end_time): (Vec<(usize, f64)>, f64) = match &setup.analysis {
+        Analysis::Dynamic { segments, .. } => (
+            segments.clone(),
+            segments.iter().map(|(n, dt)| *n as f64 * dt).sum(),
+        ),
+        Analysis::Static { steps } => (vec![(*steps, 1.0 / *steps as f64)], 1.0),
     };
     let history_path = out.join("history.csv");
-    let mut writer = Writer {
-        setup,
-        dir: out.to_path_buf(),
-        history: HistoryWriter::create(&history_path, &history_columns(setup))
-            .map_err(io_err(&history_path))?,
-        pvd: PvdWriter::new(out.join("fields.pvd")),
-        scratch: vec![0.0; model.dofs()],
-    };
-    let strain0 = model.strain_energy(&state.positions);
     let contact_report = |state: &State| {
         model
             .contact
@@ -383,50 +402,107 @@ pub fn run(
             .zip(state.contact.as_ref())
             .map(|(c, s)| c.report(&state.positions, state.time, s))
     };
+    let (mut state, mut counters, mut writer, mut frames) = if control.resume {
+        let bodies = model.contact.as_ref().map_or(0, |c| c.bodies.len());
+        let path = checkpoint_path(out);
+        let bytes = std::fs::read(&path)
+            .map_err(|e| RunError::Resume(format!("{}: {e}", path.display())))?;
+        let ck = Checkpoint::from_bytes(&bytes, model.dofs(), bodies, setup.scenario_hash)
+            .map_err(|e| RunError::Resume(format!("{}: {e}", path.display())))?;
+        ws.f_ext.copy_from_slice(&ck.external_forces);
+        let entries = ck
+            .frames
+            .iter()
+            .map(|(t, k)| (*t, frame_relative_path(*k as u64)))
+            .collect();
+        let writer = Writer {
+            setup,
+            dir: out.to_path_buf(),
+            history: HistoryWriter::resume(
+                &history_path,
+                &history_columns(setup),
+                ck.counters.step + 1,
+            )
+            .map_err(|e| RunError::Resume(format!("{}: {e}", history_path.display())))?,
+            pvd: PvdWriter::resume(out.join("fields.pvd"), entries).map_err(io_err(out))?,
+            scratch: vec![0.0; model.dofs()],
+        };
+        (ck.state, ck.counters, writer, ck.frames)
+    } else {
+        let state = match &setup.analysis {
+            Analysis::Dynamic { newmark, .. } => match newmark.initial_state(model, &mut ws) {
+                Ok(s) => s,
+                Err(e) => {
+                    let message = format!(
+                        "the initial acceleration M^-1 (F_ext - F_int) cannot be computed: {e}"
+                    );
+                    return Err(setup_failure(setup, out, start, message));
+                }
+            },
+            Analysis::Static { .. } => {
+                ws.f_ext.fill(0.0);
+                State::at_rest(model, x.clone())
+            }
+        };
+        let mut writer = Writer {
+            setup,
+            dir: out.to_path_buf(),
+            history: HistoryWriter::create(&history_path, &history_columns(setup))
+                .map_err(io_err(&history_path))?,
+            pvd: PvdWriter::new(out.join("fields.pvd")),
+            scratch: vec![0.0; model.dofs()],
+        };
+        let strain0 = model.strain_energy(&state.positions);
+        let contact0 = contact_report(&state);
+        writer.row(
+            &state,
+            &StepRecord {
+                step: 0,
+                dt: 0.0,
+                iterations: 0,
+                strain: strain0,
+                cutbacks: 0,
+                min_stretch: model.min_stretch(&state.positions).0,
+                contact: contact0.clone(),
+                states: model.element_results(&state.positions).state_fractions(),
+            },
+        )?;
+        writer.frame(0, &state, contact0.as_ref())?;
+        let counters = Counters {
+            last_strain: strain0,
+            ..Counters::default()
+        };
+        (state, counters, writer, vec![(0.0, 0)])
+    };
     let mut last_contact = contact_report(&state);
-    writer.row(
-        &state,
-        &StepRecord {
-            step: 0,
-            dt: 0.0,
-            iterations: 0,
-            strain: strain0,
-            cutbacks: 0,
-            min_stretch: model.min_stretch(&state.positions).0,
-            contact: last_contact.clone(),
-            states: model.element_results(&state.positions).state_fractions(),
-        },
-    )?;
-    writer.frame(0, &state, last_contact.as_ref())?;
-    let mut first_contact_time = None;
-
-    let mut step = 0usize;
-    let mut iterations = 0usize;
-    let mut cutback_steps = 0usize;
-    let mut last_strain = strain0;
-    let mut since_frame = 0usize;
     let mut failure: Option<RunError> = None;
-    let mut last_written = 0usize;
+    let mut interrupted = false;
+    let mut k = 0usize; // scheduled-step index
     'schedule: for (count, dt) in &schedule {
         for _ in 0..*count {
+            k += 1;
+            if k <= counters.scheduled_done {
+                continue;
+            }
             // Each scheduled step may be split into 2^k sub-steps.
             let mut pending: Vec<(f64, usize)> = vec![(*dt, 0)];
             while let Some((h, depth)) = pending.pop() {
                 let result = advance(setup, &mut state, h, length, &mut ws);
                 match result {
                     Ok(outcome) => {
-                        step += 1;
-                        iterations += outcome.newton.iterations;
+                        counters.step += 1;
+                        let step = counters.step;
+                        counters.iterations += outcome.newton.iterations;
                         if depth > 0 {
-                            cutback_steps += 1;
+                            counters.cutback_steps += 1;
                         }
-                        last_strain = outcome.strain_energy;
+                        counters.last_strain = outcome.strain_energy;
                         let (stretch, element) = model.min_stretch(&state.positions);
                         last_contact = contact_report(&state);
-                        if first_contact_time.is_none()
+                        if counters.first_contact_time.is_none()
                             && last_contact.as_ref().is_some_and(|c| c.active > 0)
                         {
-                            first_contact_time = Some(state.time);
+                            counters.first_contact_time = Some(state.time);
                         }
                         let kinetic = writer.row(
                             &state,
@@ -452,11 +528,12 @@ pub fn run(
                             strain_energy: outcome.strain_energy,
                             external_work: state.external_work,
                         });
-                        since_frame += 1;
-                        if since_frame >= setup.output_every {
+                        counters.since_frame += 1;
+                        if counters.since_frame >= setup.output_every {
                             writer.frame(step, &state, last_contact.as_ref())?;
-                            last_written = step;
-                            since_frame = 0;
+                            frames.push((state.time, step));
+                            counters.last_written = step;
+                            counters.since_frame = 0;
                         }
                         // With a wrinkling model compression carries no
                         // stress, and the instability does not exist.
@@ -479,7 +556,7 @@ pub fn run(
                     }
                     Err(e) => {
                         failure = Some(RunError::Step {
-                            step,
+                            step: counters.step,
                             time: state.time,
                             dt: h,
                             cutbacks: depth,
@@ -495,28 +572,66 @@ pub fn run(
                     }
                 }
             }
+            counters.scheduled_done = k;
+            let stop = control.stop.is_some_and(|s| s.load(Ordering::SeqCst));
+            let every = setup.checkpoint_every;
+            if stop || (every > 0 && k % every == 0) {
+                let ck = Checkpoint {
+                    scenario_hash: setup.scenario_hash,
+                    counters: Counters {
+                        wall_seconds: counters.wall_seconds + start.elapsed().as_secs_f64(),
+                        ..counters
+                    },
+                    state: state.clone(),
+                    external_forces: ws.f_ext.clone(),
+                    frames: frames.clone(),
+                };
+                let path = checkpoint_path(out);
+                write_atomic(&path, &ck.to_bytes()).map_err(io_err(&path))?;
+            }
+            if stop {
+                interrupted = true;
+                break 'schedule;
+            }
         }
     }
-    if last_written != step {
-        writer.frame(step, &state, last_contact.as_ref())?;
+    if counters.last_written != counters.step && !interrupted {
+        writer.frame(counters.step, &state, last_contact.as_ref())?;
     }
     let kinetic = model.kinetic_energy(&state.velocities, &mut writer.scratch);
+    let message = if interrupted {
+        Some(format!(
+            "interrupted after step {} at t = {:.6} s; resume with `drape run --resume {}`",
+            counters.step,
+            state.time,
+            out.display()
+        ))
+    } else {
+        failure.as_ref().map(ToString::to_string)
+    };
     let mut summary = summary(
         setup,
         &state,
-        failure.as_ref().map(ToString::to_string),
-        step,
-        iterations,
-        cutback_steps,
+        message.clone(),
+        counters.step,
+        counters.iterations,
+        counters.cutback_steps,
         start,
         kinetic,
-        last_strain,
+        counters.last_strain,
     );
-    summary.first_contact_time = first_contact_time;
+    summary.wall_seconds += counters.wall_seconds;
+    summary.first_contact_time = counters.first_contact_time;
+    if interrupted {
+        summary.status = "interrupted".into();
+    }
     write_summary(out, &summary)?;
-    match failure {
-        Some(e) => Err(e),
-        None => Ok(summary),
+    match (failure, interrupted) {
+        (Some(e), _) => Err(e),
+        (None, true) => Err(RunError::Interrupted {
+            message: message.unwrap_or_default(),
+        }),
+        (None, false) => Ok(summary),
     }
 }
 

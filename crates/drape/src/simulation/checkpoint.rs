@@ -1,0 +1,361 @@
+//! Checkpoints: the full state of a run in a versioned binary file, to
+//! resume from (`drape run --resume DIR`).
+//!
+//! Format (little-endian), version 1:
+//!
+//! ```text
+//! magic "DRAPECKP" · version u32 · scenario hash u64 · dofs u64 · nodes u64 · bodies u64
+//! counters: scheduled steps done, converged steps, Newton iterations, cut-back steps (u64 each),
+//!           first contact time f64 (NaN: none), last strain energy f64,
+//!           steps since the last frame u64, step of the last frame u64, wall seconds f64
+//! state: time f64, external work f64, positions, velocities, accelerations,
+//!        external forces of the last step (dofs f64 each)
+//! contact u8 (0/1), then hints (nodes x bodies u32), held (nodes x 2 u32, u32::MAX: none),
+//!        multipliers (nodes f64)
+//! frames u64, then (time f64, step u64) each
+//! FNV-1a of everything before, u64
+//! ```
+//!
+//! Every count is checked against the model before anything is allocated,
+//! and the trailing hash rejects a truncated or damaged file.
+
+use crate::contact::ContactState;
+use crate::integrator::State;
+use crate::scenario::fnv1a;
+
+const MAGIC: &[u8; 8] = b"DRAPECKP";
+const VERSION: u32 = 1;
+
+/// The run's counters at a checkpoint.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Counters {
+    /// Scheduled steps completed (each may have been cut into sub-steps).
+    pub scheduled_done: usize,
+    /// Converged (sub-)steps: history rows after the initial one.
+    pub step: usize,
+    /// Newton iterations so far.
+    pub iterations: usize,
+    /// Steps that needed a cut-back.
+    pub cutback_steps: usize,
+    /// Time of the first step that ended in contact.
+    pub first_contact_time: Option<f64>,
+    /// Strain energy of the last step (J).
+    pub last_strain: f64,
+    /// Converged steps since the last frame.
+    pub since_frame: usize,
+    /// Step of the last frame written.
+    pub last_written: usize,
+    /// Wall time spent before this point (s).
+    pub wall_seconds: f64,
+}
+
+/// Everything a run needs to continue.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checkpoint {
+    /// Hash of the scenario text the run was started with.
+    pub scenario_hash: u64,
+    /// Counters.
+    pub counters: Counters,
+    /// The integrator's state.
+    pub state: State,
+    /// External forces at the end of the last step (the work integral's
+    /// left end).
+    pub external_forces: Vec<f64>,
+    /// Frames written so far: `(time, step)`.
+    pub frames: Vec<(f64, usize)>,
+}
+
+/// A checkpoint that cannot be used.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum CheckpointError {
+    /// Reading failed.
+    #[error("cannot read the checkpoint: {0}")]
+    Io(#[from] std::io::Error),
+    /// Not a checkpoint, another version, damaged or truncated.
+    #[error("the checkpoint is unusable: {0}")]
+    Invalid(String),
+    /// The scenario has changed since the checkpoint was written.
+    #[error(
+        "the scenario has changed since the checkpoint was written (hash {found:016x}, the checkpoint's {expected:016x}): resuming would mix two different problems; start a new run instead"
+    )]
+    ScenarioChanged {
+        /// The checkpoint's.
+        expected: u64,
+        /// The scenario's now.
+        found: u64,
+    },
+}
+
+impl Checkpoint {
+    /// Serialises the checkpoint.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let s = &self.state;
+        let dofs = s.positions.len();
+        let nodes = dofs / 3;
+        let bodies = s
+            .contact
+            .as_ref()
+            .map_or(0, |c| c.hints.len() / nodes.max(1));
+        let mut b = Vec::with_capacity(64 + 8 * 6 * dofs);
+        b.extend_from_slice(MAGIC);
+        b.extend_from_slice(&VERSION.to_le_bytes());
+        for v in [self.scenario_hash, dofs as u64, nodes as u64, bodies as u64] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        let c = &self.counters;
+        for v in [c.scheduled_done, c.step, c.iterations, c.cutback_steps] {
+            b.extend_from_slice(&(v as u64).to_le_bytes());
+        }
+        b.extend_from_slice(&c.first_contact_time.unwrap_or(f64::NAN).to_le_bytes());
+        b.extend_from_slice(&c.last_strain.to_le_bytes());
+        b.extend_from_slice(&(c.since_frame as u64).to_le_bytes());
+        b.extend_from_slice(&(c.last_written as u64).to_le_bytes());
+        b.extend_from_slice(&c.wall_seconds.to_le_bytes());
+        b.extend_from_slice(&s.time.to_le_bytes());
+        b.extend_from_slice(&s.external_work.to_le_bytes());
+        for v in [
+            &s.positions,
+            &s.velocities,
+            &s.accelerations,
+            &self.external_forces,
+        ] {
+            for x in v.iter() {
+                b.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        match &s.contact {
+            None => b.push(0),
+            Some(cs) => {
+                b.push(1);
+                for h in &cs.hints {
+                    b.extend_from_slice(&h.to_le_bytes());
+                }
+                for held in &cs.active {
+                    let (k, f) = held.unwrap_or((u32::MAX, u32::MAX));
+                    b.extend_from_slice(&k.to_le_bytes());
+                    b.extend_from_slice(&f.to_le_bytes());
+                }
+                for m in &cs.multipliers {
+                    b.extend_from_slice(&m.to_le_bytes());
+                }
+            }
+        }
+        b.extend_from_slice(&(self.frames.len() as u64).to_le_bytes());
+        for (t, step) in &self.frames {
+            b.extend_from_slice(&t.to_le_bytes());
+            b.extend_from_slice(&(*step as u64).to_le_bytes());
+        }
+        let hash = fnv1a(&b);
+        b.extend_from_slice(&hash.to_le_bytes());
+        b
+    }
+
+    /// Reads a checkpoint written for a model of `dofs` unknowns and
+    /// `bodies` obstacles, by the scenario whose hash is `scenario_hash`.
+    pub fn from_bytes(
+        bytes: &[u8],
+        dofs: usize,
+        bodies: usize,
+        scenario_hash: u64,
+    ) -> Result<Self, CheckpointError> {
+        let bad = |m: &str| CheckpointError::Invalid(m.to_string());
+        if bytes.len() < 8 + 4 + 32 + 8 || &bytes[..8] != MAGIC {
+            return Err(bad("not a drape checkpoint"));
+        }
+        let (body, tail) = bytes.split_at(bytes.len() - 8);
+        let stored = u64::from_le_bytes(tail.try_into().map_err(|_| bad("truncated"))?);
+        if fnv1a(body) != stored {
+            return Err(bad("damaged or truncated (its checksum does not match)"));
+        }
+        let mut r = Reader { bytes: body, at: 8 };
+        let version = r.u32()?;
+        if version != VERSION {
+            return Err(bad(&format!(
+                "version {version}, this drape reads version {VERSION}"
+            )));
+        }
+        let hash = r.u64()?;
+        if hash != scenario_hash {
+            return Err(CheckpointError::ScenarioChanged {
+                expected: hash,
+                found: scenario_hash,
+            });
+        }
+        let (d, nodes, b) = (r.usize()?, r.usize()?, r.usize()?);
+        if d != dofs || nodes * 3 != dofs || b != bodies {
+            return Err(bad(&format!(
+                "written for {d} unknowns and {b} obstacles, the scenario has {dofs} and {bodies}"
+            )));
+        }
+        let counters = Counters {
+            scheduled_done: r.usize()?,
+            step: r.usize()?,
+            iterations: r.usize()?,
+            cutback_steps: r.usize()?,
+            first_contact_time: Some(r.f64()?).filter(|t| !t.is_nan()),
+            last_strain: r.f64()?,
+            since_frame: r.usize()?,
+            last_written: r.usize()?,
+            wall_seconds: r.f64()?,
+        };
+        let time = r.f64()?;
+        let external_work = r.f64()?;
+        let positions = r.f64s(dofs)?;
+        let velocities = r.f64s(dofs)?;
+        let accelerations = r.f64s(dofs)?;
+        let external_forces = r.f64s(dofs)?;
+        let contact = match r.u8()? {
+            0 => None,
+            1 => {
+                let hints = (0..nodes * bodies)
+                    .map(|_| r.u32())
+                    .collect::<Result<_, _>>()?;
+                let active = (0..nodes)
+                    .map(|_| {
+                        let (k, f) = (r.u32()?, r.u32()?);
+                        Ok((k != u32::MAX).then_some((k, f)))
+                    })
+                    .collect::<Result<_, CheckpointError>>()?;
+                let multipliers = r.f64s(nodes)?;
+                Some(ContactState {
+                    hints,
+                    active,
+                    multipliers,
+                })
+            }
+            _ => return Err(bad("bad contact flag")),
+        };
+        let count = r.usize()?;
+        if count > r.remaining() / 16 {
+            return Err(bad("frame count beyond the file"));
+        }
+        let frames = (0..count)
+            .map(|_| Ok((r.f64()?, r.usize()?)))
+            .collect::<Result<_, CheckpointError>>()?;
+        if r.remaining() != 0 {
+            return Err(bad("trailing bytes"));
+        }
+        Ok(Self {
+            scenario_hash: hash,
+            counters,
+            state: State {
+                time,
+                positions,
+                velocities,
+                accelerations,
+                external_work,
+                contact,
+            },
+            external_forces,
+            frames,
+        })
+    }
+}
+
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn take(&mut self, n: usize) -> Result<&[u8], CheckpointError> {
+        let end = self.at.checked_add(n).filter(|&e| e <= self.bytes.len());
+        let end = end.ok_or_else(|| CheckpointError::Invalid("truncated".into()))?;
+        let s = &self.bytes[self.at..end];
+        self.at = end;
+        Ok(s)
+    }
+    fn remaining(&self) -> usize {
+        self.bytes.len() - self.at
+    }
+    fn u8(&mut self) -> Result<u8, CheckpointError> {
+        Ok(self.take(1)?[0])
+    }
+    fn u32(&mut self) -> Result<u32, CheckpointError> {
+        Ok(u32::from_le_bytes(
+            self.take(4)?.try_into().expect("4 bytes"),
+        ))
+    }
+    fn u64(&mut self) -> Result<u64, CheckpointError> {
+        Ok(u64::from_le_bytes(
+            self.take(8)?.try_into().expect("8 bytes"),
+        ))
+    }
+    fn usize(&mut self) -> Result<usize, CheckpointError> {
+        usize::try_from(self.u64()?).map_err(|_| CheckpointError::Invalid("count too large".into()))
+    }
+    fn f64(&mut self) -> Result<f64, CheckpointError> {
+        Ok(f64::from_le_bytes(
+            self.take(8)?.try_into().expect("8 bytes"),
+        ))
+    }
+    fn f64s(&mut self, n: usize) -> Result<Vec<f64>, CheckpointError> {
+        if n > self.remaining() / 8 {
+            return Err(CheckpointError::Invalid("truncated".into()));
+        }
+        (0..n).map(|_| self.f64()).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(contact: bool) -> Checkpoint {
+        let n = 6;
+        let v = |k: f64| (0..n).map(|i| k + i as f64 * 0.1).collect::<Vec<f64>>();
+        Checkpoint {
+            scenario_hash: 0xdead_beef,
+            counters: Counters {
+                scheduled_done: 7,
+                step: 9,
+                iterations: 21,
+                cutback_steps: 1,
+                first_contact_time: Some(0.25),
+                last_strain: 1e-3,
+                since_frame: 2,
+                last_written: 7,
+                wall_seconds: 0.5,
+            },
+            state: State {
+                time: 0.3,
+                positions: v(1.0),
+                velocities: v(2.0),
+                accelerations: v(3.0),
+                external_work: 0.01,
+                contact: contact.then(|| ContactState {
+                    hints: vec![0, u32::MAX, 2, 1],
+                    active: vec![Some((0, 2)), None],
+                    multipliers: vec![0.5, 0.0],
+                }),
+            },
+            external_forces: v(4.0),
+            frames: vec![(0.0, 0), (0.2, 5)],
+        }
+    }
+
+    #[test]
+    fn round_trips_bit_for_bit_and_rejects_damage_and_other_scenarios() {
+        for contact in [false, true] {
+            let c = sample(contact);
+            let bytes = c.to_bytes();
+            let bodies = usize::from(contact) * 2;
+            assert_eq!(
+                Checkpoint::from_bytes(&bytes, 6, bodies, 0xdead_beef).unwrap(),
+                c
+            );
+            assert!(matches!(
+                Checkpoint::from_bytes(&bytes, 6, bodies, 1),
+                Err(CheckpointError::ScenarioChanged { .. })
+            ));
+            assert!(Checkpoint::from_bytes(&bytes, 9, bodies, 0xdead_beef).is_err());
+            for cut in [0, 10, bytes.len() / 2, bytes.len() - 1] {
+                assert!(Checkpoint::from_bytes(&bytes[..cut], 6, bodies, 0xdead_beef).is_err());
+            }
+            let mut flipped = bytes.clone();
+            flipped[40] ^= 1;
+            assert!(Checkpoint::from_bytes(&flipped, 6, bodies, 0xdead_beef).is_err());
+        }
+    }
+}
