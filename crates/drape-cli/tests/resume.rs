@@ -45,7 +45,7 @@ fn final_vtu(out: &Path) -> Vec<u8> {
     let last = pvd
         .lines()
         .filter_map(|l| l.split("file=\"").nth(1))
-        .last()
+        .next_back()
         .unwrap();
     std::fs::read(out.join(last.split('"').next().unwrap())).unwrap()
 }
@@ -100,7 +100,7 @@ fn interrupted_run_resumes_and_a_changed_scenario_is_refused() {
         "--quiet",
     ]);
     assert!(o.status.success());
-    let mut child = drape()
+    let child = drape()
         .args([
             "run",
             sc.to_str().unwrap(),

@@ -575,7 +575,7 @@ pub fn run_with(
             counters.scheduled_done = k;
             let stop = control.stop.is_some_and(|s| s.load(Ordering::SeqCst));
             let every = setup.checkpoint_every;
-            if stop || (every > 0 && k % every == 0) {
+            if stop || (every > 0 && k.is_multiple_of(every)) {
                 let ck = Checkpoint {
                     scenario_hash: setup.scenario_hash,
                     counters: Counters {
