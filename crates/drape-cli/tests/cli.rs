@@ -621,6 +621,18 @@ fn unknown_example_exits_2_and_lists_the_names() {
 
 // ---------------------------------------------------------------------------
 // Bad inputs
+//
+// Every `tests/bad_inputs/*.toml` is run through `drape check` and `drape
+// run`: each must exit 2 with a message that names the file, and the key
+// and line where it can, within BAD_INPUT_TIMEOUT and (on unix) under
+// BAD_INPUT_MEMORY_KIB of data, without panicking and without leaving an
+// output directory. The mesh files next to them (`.msh`, `.obj`, `.stl`,
+// some of them binary garbage) are read through the scenarios that name
+// them.
+//
+// A case the library still gets wrong is kept, with the message it should
+// give, commented out with `// TODO(lead):` below the table, and its file is
+// listed in BAD_INPUTS_PENDING (so that it is not forgotten, and not run).
 
 /// A scenario in tests/bad_inputs and what `check` and `run` must say about it.
 struct BadInput {
@@ -628,20 +640,485 @@ struct BadInput {
     file: &'static str,
     /// Fragments that must all appear in stderr.
     fragments: &'static [&'static str],
-    /// The line the message must name, where it can.
+    /// The line of the scenario the message must name, where it can.
     line: Option<usize>,
 }
 
+/// How long `drape check` or `drape run` may take on a bad input: a hang
+/// fails the test instead of blocking it.
+const BAD_INPUT_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(10);
+
+/// The data-segment limit (`ulimit -d`, KiB) under which bad inputs run on
+/// unix: a reader that reserves memory for a corrupt count aborts quickly
+/// instead of exhausting the machine's memory.
+const BAD_INPUT_MEMORY_KIB: u64 = 2 * 1024 * 1024;
+
+/// Largest file allowed in tests/bad_inputs (bytes).
+const BAD_INPUT_MAX_FILE: u64 = 10 * 1024;
+
 const BAD_INPUTS: &[BadInput] = &[
+    // --- TOML syntax and structure
+    BadInput {
+        file: "syntax_error.toml",
+        fragments: &["expected `,`"],
+        line: Some(7),
+    },
+    BadInput {
+        file: "syntax_unclosed_string.toml",
+        fragments: &["invalid basic string"],
+        line: Some(5),
+    },
+    BadInput {
+        file: "syntax_duplicate_key.toml",
+        fragments: &["duplicate key"],
+        line: Some(14),
+    },
+    BadInput {
+        file: "syntax_missing_value.toml",
+        fragments: &["string values must be quoted"],
+        line: Some(12),
+    },
+    BadInput {
+        file: "deep_nesting.toml",
+        fragments: &["max recursion depth"],
+        line: Some(2),
+    },
+    BadInput {
+        file: "empty_file.toml",
+        fragments: &["missing field `mesh`"],
+        line: Some(1),
+    },
+    BadInput {
+        file: "only_comment.toml",
+        fragments: &["missing field `mesh`"],
+        line: Some(1),
+    },
+    BadInput {
+        file: "garbage_scenario.toml",
+        fragments: &["cannot read", "valid UTF-8"],
+        line: None,
+    },
+    BadInput {
+        file: "unknown_key.toml",
+        fragments: &["unknown field `thicknes`", "thickness"],
+        line: Some(13),
+    },
+    BadInput {
+        file: "unknown_key_top.toml",
+        fragments: &["unknown field `gravity`", "`title`, `mesh`"],
+        line: Some(3),
+    },
+    BadInput {
+        file: "unknown_table.toml",
+        fragments: &["unknown field `materials`", "`material`"],
+        line: Some(9),
+    },
+    BadInput {
+        file: "unknown_key_obstacle.toml",
+        fragments: &["`obstacle`", "unknown field `radiu`", "`radius`"],
+        line: Some(22),
+    },
+    BadInput {
+        file: "missing_required.toml",
+        fragments: &["missing field `youngs_modulus`"],
+        line: Some(9),
+    },
+    BadInput {
+        file: "wrong_type.toml",
+        fragments: &["`material.thickness`", "invalid type", "\"thin\"", "f64"],
+        line: Some(13),
+    },
+    BadInput {
+        file: "wrong_type_divisions.toml",
+        fragments: &["`mesh.divisions`", "invalid type", "`4.5`", "usize"],
+        line: Some(7),
+    },
+    BadInput {
+        file: "negative_divisions.toml",
+        fragments: &["`mesh.divisions`", "`-4`", "usize"],
+        line: Some(7),
+    },
+    BadInput {
+        file: "integer_overflow.toml",
+        fragments: &["`mesh.divisions`", "99999999999999999999999"],
+        line: Some(7),
+    },
+    BadInput {
+        file: "wrong_length_size.toml",
+        fragments: &["`mesh.size`", "invalid length 1", "length 2"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "wrong_type_table.toml",
+        fragments: &["`load`", "invalid type", "\"gravity\"", "sequence"],
+        line: Some(3),
+    },
+    BadInput {
+        file: "title_wrong_type.toml",
+        fragments: &["`title`", "integer `3`", "string"],
+        line: Some(2),
+    },
+    BadInput {
+        file: "unknown_shape.toml",
+        fragments: &["`mesh.shape`", "`hexagon`", "rectangle", "disc", "file"],
+        line: Some(5),
+    },
+    BadInput {
+        file: "unknown_pattern.toml",
+        fragments: &["`mesh.pattern`", "`diagonal`", "right", "alternate"],
+        line: Some(8),
+    },
+    BadInput {
+        file: "unknown_analysis.toml",
+        fragments: &["`analysis.kind`", "`modal`", "dynamic", "static"],
+        line: Some(16),
+    },
+    // TODO(lead): the key should carry the index, `load[0].kind` (serde's path drops it; same for `obstacle` in unknown_key_obstacle.toml).
+    BadInput {
+        file: "unknown_load_kind.toml",
+        fragments: &["kind", "unknown variant `wind`", "pressure"],
+        line: Some(19),
+    },
+    // --- NaN, infinite, zero and negative numbers
+    BadInput {
+        file: "nan_value.toml",
+        fragments: &["`material.youngs_modulus`", "NaN"],
+        line: Some(10),
+    },
+    BadInput {
+        file: "infinite_youngs.toml",
+        fragments: &["`material.youngs_modulus`", "positive finite", "inf"],
+        line: Some(10),
+    },
+    BadInput {
+        file: "zero_youngs.toml",
+        fragments: &["`material.youngs_modulus`", "positive finite", "not 0"],
+        line: Some(10),
+    },
+    BadInput {
+        file: "negative_thickness.toml",
+        fragments: &["`material.thickness`", "positive", "-0.0006"],
+        line: Some(13),
+    },
+    BadInput {
+        file: "zero_density.toml",
+        fragments: &["`material.density`", "positive", "not 0"],
+        line: Some(12),
+    },
+    BadInput {
+        file: "negative_density_static.toml",
+        fragments: &["`material.density`", "positive", "-1"],
+        line: Some(12),
+    },
+    BadInput {
+        file: "infinite_prestress.toml",
+        fragments: &["`material.prestress`", "finite", "inf"],
+        line: Some(14),
+    },
+    BadInput {
+        file: "nan_acceleration.toml",
+        fragments: &["`load[0].acceleration`", "finite", "NaN"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "nan_monitor.toml",
+        fragments: &["`monitor[0].at`", "finite", "NaN"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "nan_velocity.toml",
+        fragments: &["`obstacle[0].velocity`", "finite", "NaN"],
+        line: Some(22),
+    },
+    BadInput {
+        file: "infinite_center.toml",
+        fragments: &["`mesh.center`", "finite", "-inf"],
+        line: Some(8),
+    },
+    BadInput {
+        file: "zero_size.toml",
+        fragments: &["`mesh.size`", "positive", "not 0"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "negative_size.toml",
+        fragments: &["`mesh.size`", "positive", "-0.2"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "zero_divisions.toml",
+        fragments: &["`mesh.divisions`", "at least 1", "[4, 0]"],
+        line: Some(7),
+    },
+    BadInput {
+        file: "huge_divisions.toml",
+        fragments: &[
+            "`mesh.divisions`",
+            "[200000, 200000]",
+            "40000400001 nodes",
+            "limit",
+        ],
+        line: Some(7),
+    },
+    BadInput {
+        file: "disc_negative_radius.toml",
+        fragments: &["`mesh.radius`", "positive", "-0.15"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "disc_zero_rings.toml",
+        fragments: &["`mesh.rings`", "must lie in 1..=", "not 0"],
+        line: Some(7),
+    },
+    BadInput {
+        file: "poisson_half.toml",
+        fragments: &["`material.poisson_ratio`", "0.5"],
+        line: Some(11),
+    },
+    BadInput {
+        file: "poisson_large.toml",
+        fragments: &["`material.poisson_ratio`", "(-1, 0.5)", "0.7"],
+        line: Some(11),
+    },
+    BadInput {
+        file: "poisson_minus_one.toml",
+        fragments: &["`material.poisson_ratio`", "(-1, 0.5)", "not -1"],
+        line: Some(11),
+    },
+    // --- Time, solver and output settings
+    BadInput {
+        file: "zero_dt.toml",
+        fragments: &["`time.segments`", "dt must be a positive"],
+        line: Some(16),
+    },
+    BadInput {
+        file: "negative_dt.toml",
+        fragments: &[
+            "`time.segments`",
+            "segment 1",
+            "dt must be a positive",
+            "-0.001",
+        ],
+        line: Some(16),
+    },
+    BadInput {
+        file: "infinite_dt.toml",
+        fragments: &["`time.segments`", "dt must be a positive finite", "inf"],
+        line: Some(16),
+    },
+    BadInput {
+        file: "zero_steps.toml",
+        fragments: &["`time.segments`", "segment 0", "steps must be at least 1"],
+        line: Some(16),
+    },
+    BadInput {
+        file: "empty_segments.toml",
+        fragments: &["`time.segments`", "at least one"],
+        line: Some(16),
+    },
+    BadInput {
+        file: "gamma_low.toml",
+        fragments: &["`time.gamma`", ">= 0.5", "0.4"],
+        line: Some(16),
+    },
+    BadInput {
+        file: "beta_zero.toml",
+        fragments: &["`time.beta`", "positive", "not 0"],
+        line: Some(16),
+    },
+    BadInput {
+        file: "static_with_time.toml",
+        fragments: &["`time.segments`", "does not apply to a static analysis"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "dynamic_without_time.toml",
+        fragments: &["`time.segments`", "is required for a dynamic analysis"],
+        line: None,
+    },
+    BadInput {
+        file: "dynamic_with_steps.toml",
+        fragments: &["`analysis.steps`", "does not apply to a dynamic analysis"],
+        line: Some(16),
+    },
+    BadInput {
+        file: "static_zero_steps.toml",
+        fragments: &["`analysis.steps`", "at least 1"],
+        line: Some(17),
+    },
+    BadInput {
+        file: "tolerance_out_of_range.toml",
+        fragments: &["`solver.tolerance`", "(0, 1)", "1.5"],
+        line: Some(19),
+    },
+    BadInput {
+        file: "max_iterations_zero.toml",
+        fragments: &["`solver.max_iterations`", "at least 1"],
+        line: Some(19),
+    },
+    BadInput {
+        file: "max_cutbacks_large.toml",
+        fragments: &["`solver.max_cutbacks`", "at most 30", "31"],
+        line: Some(19),
+    },
+    BadInput {
+        file: "output_every_zero.toml",
+        fragments: &["`output.every`", "at least 1"],
+        line: Some(19),
+    },
+    // --- Mesh, material, loads, fixes and monitors
+    BadInput {
+        file: "order_4.toml",
+        fragments: &["`mesh.order`", "1, 2 or 3", "not 4"],
+        line: Some(8),
+    },
+    BadInput {
+        file: "radius_on_rectangle.toml",
+        fragments: &["`mesh.radius`", "does not apply to shape = \"rectangle\""],
+        line: Some(8),
+    },
+    BadInput {
+        file: "divisions_on_disc.toml",
+        fragments: &["`mesh.divisions`", "does not apply to shape = \"disc\""],
+        line: Some(8),
+    },
+    BadInput {
+        file: "size_on_file.toml",
+        fragments: &["`mesh.size`", "does not apply to shape = \"file\""],
+        line: Some(7),
+    },
+    BadInput {
+        file: "missing_divisions.toml",
+        fragments: &["`mesh.divisions`", "is required for shape = \"rectangle\""],
+        line: Some(4),
+    },
+    BadInput {
+        file: "unknown_material_model.toml",
+        fragments: &["`material.model`", "\"neo-hookean\""],
+        line: Some(14),
+    },
+    BadInput {
+        file: "unknown_wrinkling.toml",
+        fragments: &[
+            "`material.wrinkling`",
+            "\"tension-field\"",
+            "stress-projection",
+        ],
+        line: Some(14),
+    },
+    BadInput {
+        file: "relaxed_energy_prestress.toml",
+        fragments: &["`material.prestress`", "relaxed-energy", "not 100"],
+        line: Some(15),
+    },
+    BadInput {
+        file: "negative_ramp.toml",
+        fragments: &["`load[1].ramp`", "positive", "-0.1"],
+        line: Some(25),
+    },
+    BadInput {
+        file: "gravity_force_and_acceleration.toml",
+        fragments: &["`load[0].acceleration`", "together with force"],
+        line: Some(21),
+    },
+    BadInput {
+        file: "pressure_without_value.toml",
+        fragments: &["`load[0].value`", "is required for a pressure"],
+        line: Some(18),
+    },
+    BadInput {
+        file: "surface_load_with_selector.toml",
+        fragments: &["`load[0].at`", "does not apply to a surface load"],
+        line: Some(21),
+    },
+    BadInput {
+        file: "nodal_load_without_selector.toml",
+        fragments: &[
+            "`load[0].at`",
+            "no node selector",
+            "`within`",
+            "`boundary = true`",
+        ],
+        line: Some(18),
+    },
+    BadInput {
+        file: "fix_without_selector.toml",
+        fragments: &["`fix[0].at`", "no node selector"],
+        line: Some(18),
+    },
+    BadInput {
+        file: "fix_selects_no_node.toml",
+        fragments: &["`fix[1].within`", "selects no node"],
+        line: Some(22),
+    },
+    BadInput {
+        file: "fix_far_node.toml",
+        fragments: &["`fix[0].at`", "[5.0, 0.0, 0.0]", "nearest node"],
+        line: Some(19),
+    },
+    BadInput {
+        file: "unknown_component.toml",
+        fragments: &["`fix[0].components`", "\"x\", \"y\" or \"z\"", "not \"w\""],
+        line: Some(20),
+    },
+    BadInput {
+        file: "empty_components.toml",
+        fragments: &["`fix[0].components`", "at least one"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "monitor_far.toml",
+        fragments: &["`monitor[1].at`", "nearest node"],
+        line: Some(23),
+    },
+    BadInput {
+        file: "duplicate_monitor.toml",
+        fragments: &["`monitor[1].name`", "\"corner\"", "used twice"],
+        line: Some(23),
+    },
+    BadInput {
+        file: "bad_monitor_name.toml",
+        fragments: &["`monitor[0].name`", "\"top corner,x\""],
+        line: Some(19),
+    },
+    BadInput {
+        file: "empty_monitor_name.toml",
+        fragments: &["`monitor[0].name`", "not \"\""],
+        line: Some(19),
+    },
+    // --- Contact and obstacles
     BadInput {
         file: "obstacle_without_contact.toml",
         fragments: &["`contact.method`", "required when there are obstacles"],
         line: None,
     },
     BadInput {
+        file: "contact_without_obstacle.toml",
+        fragments: &["`contact.method`", "no [[obstacle]]"],
+        line: Some(19),
+    },
+    BadInput {
+        file: "unknown_contact_method.toml",
+        fragments: &["`contact.method`", "\"friction\"", "penalty", "lagrange"],
+        line: Some(24),
+    },
+    BadInput {
         file: "penalty_missing.toml",
         fragments: &["`contact.penalty`", "required"],
         line: Some(21),
+    },
+    BadInput {
+        file: "negative_penalty.toml",
+        fragments: &["`contact.penalty`", "positive", "-10000"],
+        line: Some(25),
+    },
+    BadInput {
+        file: "lagrange_with_penalty.toml",
+        fragments: &[
+            "`contact.penalty`",
+            "does not apply to method = \"lagrange\"",
+        ],
+        line: Some(25),
     },
     BadInput {
         file: "unknown_obstacle.toml",
@@ -659,60 +1136,266 @@ const BAD_INPUTS: &[BadInput] = &[
         line: Some(19),
     },
     BadInput {
-        file: "unknown_key.toml",
-        fragments: &["unknown field `thicknes`", "thickness"],
-        line: Some(13),
+        file: "sphere_zero_radius.toml",
+        fragments: &["`obstacle[0].radius`", "positive", "found 0"],
+        line: Some(21),
     },
     BadInput {
-        file: "wrong_type.toml",
-        fragments: &["`material.thickness`", "invalid type", "\"thin\"", "f64"],
-        line: Some(13),
+        file: "cylinder_missing_height.toml",
+        fragments: &[
+            "`obstacle[0].height`",
+            "is required for shape = \"cylinder\"",
+        ],
+        line: Some(18),
     },
     BadInput {
-        file: "negative_thickness.toml",
-        fragments: &["`material.thickness`", "positive"],
-        line: Some(13),
+        file: "edge_radius_too_large.toml",
+        fragments: &[
+            "`obstacle[0].edge_radius`",
+            "half the smallest dimension",
+            "not 0.03",
+        ],
+        line: Some(22),
     },
     BadInput {
-        file: "poisson_half.toml",
-        fragments: &["`material.poisson_ratio`", "0.5"],
-        line: Some(11),
+        file: "edge_radius_negative.toml",
+        fragments: &["`obstacle[0].edge_radius`", "[0, 0.025)", "-0.001"],
+        line: Some(24),
     },
+    BadInput {
+        file: "edge_radius_on_sphere.toml",
+        fragments: &[
+            "`obstacle[0].edge_radius`",
+            "does not apply to shape = \"sphere\"",
+        ],
+        line: Some(22),
+    },
+    BadInput {
+        file: "mesh_obstacle_missing_path.toml",
+        fragments: &["`obstacle[0].path`", "is required for shape = \"mesh\""],
+        line: Some(18),
+    },
+    BadInput {
+        file: "obstacle_interpenetrating.toml",
+        fragments: &[
+            "`obstacle[0].shape`",
+            "starts interpenetrating the fabric",
+            "5.0000e-2 m inside",
+        ],
+        line: Some(19),
+    },
+    BadInput {
+        file: "plane_above.toml",
+        fragments: &[
+            "`obstacle[0].shape`",
+            "starts interpenetrating the fabric",
+            "1.0000e-1 m inside",
+        ],
+        line: Some(19),
+    },
+    BadInput {
+        file: "box_interpenetrating.toml",
+        fragments: &[
+            "`obstacle[1].shape`",
+            "starts interpenetrating the fabric",
+            "2.0000e-2 m inside",
+        ],
+        line: Some(24),
+    },
+    BadInput {
+        file: "engulfing_stl.toml",
+        fragments: &[
+            "`obstacle[0].shape`",
+            "engulfing.stl",
+            "starts interpenetrating the fabric",
+        ],
+        line: Some(19),
+    },
+    // --- Fabric mesh files (.msh, .obj)
     BadInput {
         file: "missing_mesh_file.toml",
         fragments: &["nope.msh", "cannot read"],
         line: None,
     },
     BadInput {
-        file: "syntax_error.toml",
-        // The unterminated array of line 6 is detected on line 7.
-        fragments: &["expected `,`"],
+        file: "unknown_mesh_extension.toml",
+        fragments: &["`mesh.path`", "unknown mesh format"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "order_mismatch_msh.toml",
+        fragments: &["`mesh.order`", "is 2", "square.msh", "order 1"],
         line: Some(7),
-    },
-    BadInput {
-        file: "missing_required.toml",
-        fragments: &["missing field `youngs_modulus`"],
-        line: Some(9),
-    },
-    BadInput {
-        file: "zero_dt.toml",
-        fragments: &["`time.segments`", "dt must be a positive"],
-        line: Some(16),
-    },
-    BadInput {
-        file: "nan_value.toml",
-        fragments: &["`material.youngs_modulus`", "NaN"],
-        line: Some(10),
-    },
-    BadInput {
-        file: "monitor_far.toml",
-        fragments: &["`monitor[1].at`", "nearest node"],
-        line: Some(23),
     },
     BadInput {
         file: "garbage_mesh.toml",
         fragments: &["garbage.msh", "$MeshFormat"],
         line: None,
+    },
+    BadInput {
+        file: "garbage_binary_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "garbage_binary.msh, line 1",
+            "expected $MeshFormat",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "garbage_binary_body_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "garbage_binary_body.msh, byte 77",
+            "negative",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "zero_bytes_msh.toml",
+        fragments: &["`mesh.path`", "zero_bytes.msh", "empty"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "empty_msh.toml",
+        fragments: &["`mesh.path`", "empty.msh", "no triangles"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "lines_only_msh.toml",
+        fragments: &["`mesh.path`", "lines_only.msh", "no triangles"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "no_elements_msh.toml",
+        fragments: &["`mesh.path`", "no_elements.msh", "no triangles"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "version3_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "version3.msh, line 2",
+            "unsupported MSH version 3.0",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "truncated_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "truncated.msh, line 8",
+            "expected 4 numbers for node, found 2",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "truncated_elements_msh.toml",
+        fragments: &["`mesh.path`", "truncated_elements.msh, line 14", "found 5"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "huge_count_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "huge_count.msh, line 9",
+            "node 4 of 1000000000000",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "huge_count_41_msh.toml",
+        fragments: &["`mesh.path`", "huge_count_41.msh, line 10", "node tag"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "huge_elements_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "huge_elements.msh, line 13",
+            "element 2 of 1000000000000",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "huge_block_41_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "huge_block_41.msh, line 18",
+            "element 2 of 1000000000000",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "huge_tags_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "huge_tags.msh, line 13",
+            "1000000000000 tags",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "binary_huge_msh.toml",
+        fragments: &["`mesh.path`", "binary_huge.msh", "$Nodes"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "count_overflow_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "count_overflow.msh, line 5",
+            "99999999999999999999999",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "duplicate_tag_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "duplicate_tag.msh, line 8",
+            "node 2 is defined twice",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "nan_node_msh.toml",
+        fragments: &["`mesh.path`", "nan_node.msh, line 8", "non-finite", "NaN"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "quad_msh.toml",
+        fragments: &["`mesh.path`", "quad.msh, line 13", "quadrangle"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "mixed_orders_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "mixed_orders.msh, line 16",
+            "order 2",
+            "order 1",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "node_out_of_range_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "node_out_of_range.msh, line 14",
+            "node 9",
+            "not defined",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "repeated_node_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "repeated_node.msh",
+            "element 1 (0-based",
+            "node 2 more than once",
+        ],
+        line: Some(6),
     },
     BadInput {
         file: "degenerate_mesh.toml",
@@ -725,26 +1408,388 @@ const BAD_INPUTS: &[BadInput] = &[
         line: Some(6),
     },
     BadInput {
-        file: "unknown_shape.toml",
-        fragments: &["`mesh.shape`", "`hexagon`", "rectangle", "disc", "file"],
-        line: Some(5),
+        file: "zero_area_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "zero_area.msh",
+            "element 2 (0-based",
+            "is degenerate",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "inverted_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "inverted.msh",
+            "elements 0 and 1",
+            "oriented oppositely",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "garbage_obj.toml",
+        fragments: &["`mesh.path`", "garbage.obj", "no triangles"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "zero_bytes_obj.toml",
+        fragments: &["`mesh.path`", "zero_bytes.obj", "no triangles"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "no_faces_obj.toml",
+        fragments: &["`mesh.path`", "no_faces.obj", "no triangles"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "truncated_obj.toml",
+        fragments: &[
+            "`mesh.path`",
+            "truncated.obj, line 4",
+            "vertex 4",
+            "found 2 numbers",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "out_of_range_obj.toml",
+        fragments: &[
+            "`mesh.path`",
+            "out_of_range.obj, line 6",
+            "node 7",
+            "not defined",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "negative_index_obj.toml",
+        fragments: &["`mesh.path`", "negative_index.obj, line 6", "-9"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "zero_index_obj.toml",
+        fragments: &["`mesh.path`", "zero_index.obj, line 4", "index 0"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "index_overflow_obj.toml",
+        fragments: &[
+            "`mesh.path`",
+            "index_overflow.obj, line 4",
+            "99999999999999999999999",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "repeated_obj.toml",
+        fragments: &[
+            "`mesh.path`",
+            "repeated.obj",
+            "element 1 (0-based",
+            "more than once",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "zero_area_obj.toml",
+        fragments: &[
+            "`mesh.path`",
+            "zero_area.obj",
+            "element 0 (0-based",
+            "is degenerate",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "inverted_obj.toml",
+        fragments: &[
+            "`mesh.path`",
+            "inverted.obj",
+            "elements 0 and 1",
+            "oriented oppositely",
+        ],
+        line: Some(6),
+    },
+    // --- Obstacle mesh files (.stl, .obj)
+    BadInput {
+        file: "missing_obstacle_file.toml",
+        fragments: &["`obstacle[0].path`", "nope.stl", "cannot read"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "unsupported_obstacle_format.toml",
+        fragments: &[
+            "`obstacle[0].path`",
+            "obstacle.ply",
+            "unsupported obstacle mesh format",
+        ],
+        line: Some(20),
+    },
+    BadInput {
+        file: "msh_obstacle.toml",
+        fragments: &[
+            "`obstacle[0].path`",
+            "square.msh",
+            "unsupported obstacle mesh format",
+        ],
+        line: Some(20),
+    },
+    BadInput {
+        file: "garbage_stl.toml",
+        fragments: &[
+            "`obstacle[0].path`",
+            "garbage.stl, byte 80",
+            "not an ASCII STL",
+            "the file has 3001",
+        ],
+        line: Some(20),
+    },
+    BadInput {
+        file: "zero_bytes_stl.toml",
+        fragments: &["`obstacle[0].path`", "zero_bytes.stl", "not an STL file"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "empty_stl.toml",
+        fragments: &["`obstacle[0].path`", "empty_binary.stl", "no triangles"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "truncated_binary_stl.toml",
+        fragments: &[
+            "`obstacle[0].path`",
+            "truncated_binary.stl",
+            "1000 triangles",
+            "the file has 184",
+        ],
+        line: Some(20),
+    },
+    BadInput {
+        file: "truncated_ascii_stl.toml",
+        fragments: &["`obstacle[0].path`", "truncated_ascii.stl", "endsolid"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "only_solid_stl.toml",
+        fragments: &["`obstacle[0].path`", "only_solid.stl", "endsolid"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "bad_keyword_stl.toml",
+        fragments: &["`obstacle[0].path`", "bad_keyword.stl, line 3", "'lop'"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "nan_stl.toml",
+        fragments: &[
+            "`obstacle[0].path`",
+            "nan_ascii.stl, line 6",
+            "non-finite",
+            "NaN",
+        ],
+        line: Some(20),
+    },
+    BadInput {
+        file: "zeros_stl.toml",
+        fragments: &[
+            "`obstacle[0].path`",
+            "zeros.stl",
+            "triangle 1 is degenerate",
+        ],
+        line: Some(20),
+    },
+    BadInput {
+        file: "open_stl.toml",
+        fragments: &["`obstacle[0].path`", "open.stl", "not closed"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "flipped_face_stl.toml",
+        fragments: &[
+            "`obstacle[0].path`",
+            "flipped_face.stl",
+            "inconsistently oriented",
+        ],
+        line: Some(20),
+    },
+    BadInput {
+        file: "open_obj_obstacle.toml",
+        fragments: &["`obstacle[0].path`", "open.obj", "not closed"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "garbage_obj_obstacle.toml",
+        fragments: &["`obstacle[0].path`", "garbage.obj", "no triangles"],
+        line: Some(20),
     },
 ];
+
+// Cases the library does not handle yet (see BAD_INPUTS_PENDING).
+// TODO(lead): names `obstacle[0].radius` (line 22) for a zero axis: the obstacle error's key is dropped in build_contact.
+// BadInput {
+//     file: "cylinder_zero_axis.toml",
+//     fragments: &["`obstacle[0].axis`", "zero vector"],
+//     line: Some(21),
+// },
+// TODO(lead): names `obstacle[0].radius` (line 22) for a zero height.
+// BadInput {
+//     file: "cylinder_zero_height.toml",
+//     fragments: &["`obstacle[0].height`", "positive", "found 0"],
+//     line: Some(23),
+// },
+// TODO(lead): names `obstacle[0].radius` (line 21) for a NaN centre.
+// BadInput {
+//     file: "sphere_nan_center.toml",
+//     fragments: &["`obstacle[0].center`", "non-finite", "NaN"],
+//     line: Some(20),
+// },
+// TODO(lead): names `obstacle[0].max` (line 21) for a NaN min.
+// BadInput {
+//     file: "box_nan_min.toml",
+//     fragments: &["`obstacle[0].min`", "non-finite", "NaN"],
+//     line: Some(20),
+// },
+// TODO(lead): names `obstacle[0].normal` (line 21) for an infinite point.
+// BadInput {
+//     file: "plane_infinite_point.toml",
+//     fragments: &["`obstacle[0].point`", "non-finite", "inf"],
+//     line: Some(20),
+// },
+// TODO(lead): no line for the first invalid byte, and the I/O error is printed twice.
+// BadInput {
+//     file: "garbage_scenario.toml",
+//     fragments: &["valid UTF-8"],
+//     line: Some(2),
+// },
+// TODO(lead): accepted (exit 0, the run completes): only nodes are tested, and none is inside the sphere.
+// BadInput {
+//     file: "sphere_between_nodes.toml",
+//     fragments: &["`obstacle[0].shape`", "starts interpenetrating the fabric"],
+//     line: Some(19),
+// },
+// TODO(lead): accepted by the 2e7-node limit, but `drape check` alone needs ~25 GB and minutes.
+// BadInput {
+//     file: "divisions_memory.toml",
+//     fragments: &["`mesh.divisions`", "[4000, 4000]", "16008001 nodes"],
+//     line: Some(7),
+// },
+
+/// Files of tests/bad_inputs whose case is commented out `// TODO(lead):`
+/// above, waiting for a library fix; they are not run. Move a case back into
+/// BAD_INPUTS (and out of this list) once the library gives its message.
+const BAD_INPUTS_PENDING: &[&str] = &[
+    "cylinder_zero_axis.toml",
+    "cylinder_zero_height.toml",
+    "sphere_nan_center.toml",
+    "box_nan_min.toml",
+    "plane_infinite_point.toml",
+    "sphere_between_nodes.toml",
+    "divisions_memory.toml",
+];
+
+/// Runs `drape ARGS` in `cwd` like [`drape`], but with its output captured
+/// in files next to `log` (so that no pipe can fill up), killed after
+/// BAD_INPUT_TIMEOUT, and on unix under a data limit of
+/// BAD_INPUT_MEMORY_KIB. `Err` says that it was killed for taking too long.
+fn drape_limited(cwd: &Path, args: &[&std::ffi::OsStr], log: &Path) -> Result<Output, String> {
+    let stdout_path = log.with_extension("stdout");
+    let stderr_path = log.with_extension("stderr");
+    let create = |p: &Path| {
+        std::fs::File::create(p).unwrap_or_else(|e| panic!("create {}: {e}", p.display()))
+    };
+    let mut command = if cfg!(unix) && Path::new("/bin/sh").exists() {
+        // `exec` keeps the process id, so a kill reaches drape itself.
+        let mut c = Command::new("/bin/sh");
+        c.arg("-c")
+            .arg(format!(
+                "ulimit -d {BAD_INPUT_MEMORY_KIB} 2>/dev/null; exec \"$0\" \"$@\""
+            ))
+            .arg(DRAPE);
+        c
+    } else {
+        Command::new(DRAPE)
+    };
+    let mut child = command
+        .args(args)
+        .current_dir(cwd)
+        .stdin(std::process::Stdio::null())
+        .stdout(create(&stdout_path))
+        .stderr(create(&stderr_path))
+        .spawn()
+        .expect("spawn the drape binary");
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("wait for drape") {
+            break status;
+        }
+        if start.elapsed() > BAD_INPUT_TIMEOUT {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(format!(
+                "still running after {BAD_INPUT_TIMEOUT:?} (killed); stderr so far:\n{}",
+                std::fs::read_to_string(&stderr_path).unwrap_or_default()
+            ));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    };
+    Ok(Output {
+        status,
+        stdout: std::fs::read(&stdout_path).unwrap_or_default(),
+        stderr: std::fs::read(&stderr_path).unwrap_or_default(),
+    })
+}
+
+#[test]
+fn bad_inputs_are_all_listed_used_and_small() {
+    assert!(BAD_INPUTS.len() >= 40, "{} bad inputs", BAD_INPUTS.len());
+    let listed: BTreeSet<&str> = BAD_INPUTS.iter().map(|b| b.file).collect();
+    let pending: BTreeSet<&str> = BAD_INPUTS_PENDING.iter().copied().collect();
+    assert_eq!(listed.len(), BAD_INPUTS.len(), "a file is listed twice");
+    assert_eq!(
+        pending.len(),
+        BAD_INPUTS_PENDING.len(),
+        "a file is pending twice"
+    );
+    for file in &pending {
+        assert!(!listed.contains(file), "{file} is both pending and listed");
+        assert!(
+            bad_inputs_dir().join(file).is_file(),
+            "{file} does not exist"
+        );
+    }
+    let mut scenarios = Vec::new();
+    let mut others = Vec::new();
+    for entry in std::fs::read_dir(bad_inputs_dir()).unwrap() {
+        let entry = entry.unwrap();
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let len = entry.metadata().unwrap().len();
+        assert!(len <= BAD_INPUT_MAX_FILE, "{name} has {len} bytes");
+        if name.ends_with(".toml") {
+            assert!(
+                listed.contains(name.as_str()) || pending.contains(name.as_str()),
+                "{name} is neither in BAD_INPUTS nor in BAD_INPUTS_PENDING"
+            );
+            scenarios.push(std::fs::read(entry.path()).unwrap());
+        } else {
+            others.push(name);
+        }
+    }
+    // Every mesh file is named by a scenario (none is left over).
+    for name in others {
+        let quoted = format!("\"{name}\"");
+        assert!(
+            scenarios
+                .iter()
+                .any(|s| s.windows(quoted.len()).any(|w| w == quoted.as_bytes())),
+            "{name} is used by no scenario of tests/bad_inputs"
+        );
+    }
+}
 
 #[test]
 fn bad_inputs_exit_2_with_a_message_naming_file_key_and_line() {
     let tmp = TempDir::new("bad-inputs");
-    // Every scenario in the folder is in the table.
-    let listed: BTreeSet<&str> = BAD_INPUTS.iter().map(|b| b.file).collect();
-    for entry in std::fs::read_dir(bad_inputs_dir()).unwrap() {
-        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
-        if name.ends_with(".toml") {
-            assert!(
-                listed.contains(name.as_str()),
-                "{name} is not in BAD_INPUTS"
-            );
-        }
-    }
     let mut failures = Vec::new();
     for bad in BAD_INPUTS {
         let scenario = bad_inputs_dir().join(bad.file);
@@ -755,12 +1800,22 @@ fn bad_inputs_exit_2_with_a_message_naming_file_key_and_line() {
             if verb == "run" {
                 args.extend(["--out".as_ref(), out.as_os_str()]);
             }
-            let o = drape(tmp.path(), &args);
             let what = format!("drape {verb} {}", bad.file);
+            let log = tmp.path().join(format!("{verb}-{}", bad.file));
+            let o = match drape_limited(tmp.path(), &args, &log) {
+                Ok(o) => o,
+                Err(e) => {
+                    failures.push(format!("{what}: {e}"));
+                    continue;
+                }
+            };
             let err = stderr(&o);
             let mut problems = Vec::new();
-            if o.status.code() != Some(2) {
-                problems.push("exit code is not 2".to_string());
+            match o.status.code() {
+                Some(2) => {}
+                Some(_) => problems.push("exit code is not 2".to_string()),
+                None => problems
+                    .push("killed by a signal (an abort, e.g. a failed allocation?)".to_string()),
             }
             if err.contains("panicked") || err.contains("RUST_BACKTRACE") {
                 problems.push("it panicked".to_string());
@@ -774,9 +1829,9 @@ fn bad_inputs_exit_2_with_a_message_naming_file_key_and_line() {
                 }
             }
             if let Some(line) = bad.line
-                && !err.contains(&format!("line {line}"))
+                && !err.contains(&format!("{}, line {line}:", bad.file))
             {
-                problems.push(format!("stderr does not name line {line}"));
+                problems.push(format!("stderr does not name line {line} of {}", bad.file));
             }
             if out.exists() {
                 problems.push("a bad input left an output directory".to_string());
@@ -786,7 +1841,13 @@ fn bad_inputs_exit_2_with_a_message_naming_file_key_and_line() {
             }
         }
     }
-    assert!(failures.is_empty(), "\n{}", failures.join("\n\n"));
+    assert!(
+        failures.is_empty(),
+        "{} of {} runs failed:\n{}",
+        failures.len(),
+        2 * BAD_INPUTS.len(),
+        failures.join("\n\n")
+    );
 }
 
 #[test]

@@ -40,12 +40,21 @@ pub struct DynamicWorkspace {
 }
 
 impl DynamicWorkspace {
-    /// Buffers for `model`.
+    /// Buffers for `model`, with direct linear solves.
     pub fn new(model: &Model) -> Result<Self, crate::solver::LinearSolveError> {
+        Self::with_mode(model, crate::solver::LinearMode::Direct)
+    }
+
+    /// Buffers for `model`, solving linear systems as `mode` says.
+    pub fn with_mode(
+        model: &Model,
+        mode: crate::solver::LinearMode,
+    ) -> Result<Self, crate::solver::LinearSolveError> {
         let n = model.dofs();
         let linear =
             crate::solver::LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx)?
-                .with_transpose(model.pattern.transpose_map().to_vec());
+                .with_transpose(model.pattern.transpose_map().to_vec())
+                .with_mode(mode);
         Ok(Self {
             q: vec![0.0; n],
             mq: vec![0.0; n],

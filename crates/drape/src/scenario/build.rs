@@ -64,6 +64,8 @@ pub struct Setup {
     pub monitors: Vec<Monitor>,
     /// Write a checkpoint every this many scheduled steps (0: never).
     pub checkpoint_every: usize,
+    /// How linear systems are solved.
+    pub linear: crate::solver::LinearMode,
     /// The scenario file (absolute when it could be resolved).
     pub scenario_path: PathBuf,
     /// FNV-1a hash of the scenario text: a resumed run refuses a changed scenario.
@@ -461,6 +463,7 @@ impl Scenario {
             output_every: self.output.every,
             monitors,
             checkpoint_every: self.output.checkpoint_every,
+            linear: s.linear,
             scenario_path: std::fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf()),
             scenario_hash: fnv1a(source.as_bytes()),
         })

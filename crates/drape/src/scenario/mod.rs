@@ -359,6 +359,12 @@ pub struct SolverSpec {
     /// How many times a failing step may be halved, >= 0. Default 6.
     #[serde(default = "default_max_cutbacks")]
     pub max_cutbacks: usize,
+    /// Linear solver: `"auto"` (default: `direct` up to 300,000 unknowns,
+    /// `iterative` above), `"direct"` (a fresh sparse factorisation every
+    /// solve), `"iterative"` (block-Jacobi GMRES, no factorisation) or
+    /// `"reuse"` (GMRES preconditioned by an earlier factorisation).
+    #[serde(default)]
+    pub linear: crate::solver::LinearMode,
 }
 
 impl Default for SolverSpec {
@@ -368,6 +374,7 @@ impl Default for SolverSpec {
             residual_tolerance: default_residual_tolerance(),
             max_iterations: default_max_iterations(),
             max_cutbacks: default_max_cutbacks(),
+            linear: crate::solver::LinearMode::default(),
         }
     }
 }

@@ -91,6 +91,8 @@ pub struct Summary {
     pub external_work: f64,
     /// Final position of each monitor.
     pub monitors: BTreeMap<String, [f64; 3]>,
+    /// What the linear solver did (this session of the run).
+    pub linear: crate::solver::LinearStats,
 }
 
 /// A run that stopped early; everything up to the last converged step is on disk.
@@ -381,7 +383,7 @@ pub fn run_with(
     let start = Instant::now();
     let model = &setup.model;
     std::fs::create_dir_all(out.join("fields")).map_err(io_err(out))?;
-    let mut ws = match DynamicWorkspace::new(model) {
+    let mut ws = match DynamicWorkspace::with_mode(model, setup.linear) {
         Ok(ws) => ws,
         Err(e) => return Err(setup_failure(setup, out, start, e.to_string())),
     };
@@ -621,6 +623,7 @@ pub fn run_with(
         counters.last_strain,
     );
     summary.wall_seconds += counters.wall_seconds;
+    summary.linear = ws.newton.linear.stats;
     summary.first_contact_time = counters.first_contact_time;
     if interrupted {
         summary.status = "interrupted".into();
@@ -679,6 +682,7 @@ fn summary(
                 (m.name.clone(), [p[0], p[1], p[2]])
             })
             .collect(),
+        linear: Default::default(),
     }
 }
 

@@ -33,6 +33,83 @@ pub enum Factorization {
     /// GMRES preconditioned by the Cholesky factor of the symmetric part
     /// `(A + A^T) / 2`.
     PreconditionedGmres,
+    /// GMRES preconditioned by the Cholesky factor of an earlier matrix.
+    ReusedFactorGmres,
+    /// GMRES preconditioned by the inverted 3x3 diagonal blocks.
+    BlockJacobiGmres,
+}
+
+/// What the linear solver has done (for reports and benchmarks).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub struct LinearStats {
+    /// Systems solved.
+    pub solves: usize,
+    /// Numeric Cholesky factorisations.
+    pub cholesky_factorizations: usize,
+    /// Numeric LU factorisations.
+    pub lu_factorizations: usize,
+    /// Krylov (GMRES) iterations.
+    pub krylov_iterations: usize,
+}
+
+/// Above this many unknowns `auto` uses block-Jacobi GMRES, not factorisations.
+const AUTO_ITERATIVE_ABOVE: usize = 300_000;
+/// Krylov iterations a reused factor gets before the matrix is refactorised.
+const REUSE_ITERATIONS: usize = 8;
+/// Most block-Jacobi GMRES iterations before LU takes over.
+const ITERATIVE_ITERATIONS: usize = 400;
+
+/// What preconditions the Krylov iterations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Preconditioner {
+    /// The kept Cholesky factor.
+    Cholesky,
+    /// Inverted 3x3 diagonal blocks.
+    BlockJacobi,
+}
+
+/// How linear systems are solved (`[solver] linear`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LinearMode {
+    /// A fresh factorisation for every solve: Cholesky when symmetric
+    /// positive definite; GMRES preconditioned by the Cholesky factor of the
+    /// symmetric part when not symmetric; LU otherwise.
+    Direct,
+    /// `direct` up to 300,000 unknowns, `iterative` above (where a sparse
+    /// factorisation costs seconds and gigabytes).
+    #[default]
+    Auto,
+    /// GMRES preconditioned by the Cholesky factor of an earlier Hessian,
+    /// refactorised only when it stops converging in 8 iterations (the
+    /// Hessian changes little from one Newton iteration and step to the
+    /// next). On the 20x20 pedestal it cuts the factorisations by 3 without
+    /// saving time (docs/performance.md); meant for larger meshes.
+    Reuse,
+    /// GMRES preconditioned by the inverted 3x3 diagonal blocks: no
+    /// factorisation at all (large meshes with a dominant mass term).
+    Iterative,
+}
+
+/// Inverse of a 3x3 matrix, `None` when (nearly) singular.
+fn invert3(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
+    let c = |r: usize, k: usize| {
+        let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
+        let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+        m[r1][k1] * m[r2][k2] - m[r1][k2] * m[r2][k1]
+    };
+    let det = m[0][0] * c(0, 0) + m[0][1] * c(0, 1) + m[0][2] * c(0, 2);
+    let scale = m.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+    if !(det.abs() > 1e-14 * scale.powi(3)) {
+        return None;
+    }
+    let mut inv = [[0.0; 3]; 3];
+    for r in 0..3 {
+        for k in 0..3 {
+            inv[r][k] = c(k, r) / det;
+        }
+    }
+    Some(inv)
 }
 
 /// A linear solve that could not be done.
@@ -66,10 +143,17 @@ pub struct LinearSolver {
     krylov: Krylov,
     /// Krylov iterations of the last solve (0 for direct solves).
     pub last_krylov_iterations: usize,
+    /// Counts since the solver was made.
+    pub stats: LinearStats,
+    /// How systems are solved.
+    mode: LinearMode,
+    /// Whether the Cholesky storage holds a usable factor (reusable).
+    factor_kept: bool,
 }
 
 struct Krylov {
     symmetric_part: Vec<f64>,
+    blocks: Vec<[[f64; 3]; 3]>,
     basis: Vec<Vec<f64>>,
     work: Mat<f64>,
     z: Vec<f64>,
@@ -79,6 +163,7 @@ impl Default for Krylov {
     fn default() -> Self {
         Self {
             symmetric_part: Vec::new(),
+            blocks: Vec::new(),
             basis: Vec::new(),
             work: Mat::zeros(0, 0),
             z: Vec::new(),
@@ -117,7 +202,16 @@ impl LinearSolver {
             transpose: None,
             krylov: Krylov::default(),
             last_krylov_iterations: 0,
+            mode: LinearMode::Direct,
+            factor_kept: false,
+            stats: LinearStats::default(),
         })
+    }
+
+    /// Chooses how systems are solved (default [`LinearMode::Direct`]).
+    pub fn with_mode(mut self, mode: LinearMode) -> Self {
+        self.mode = mode;
+        self
     }
 
     /// Enables the preconditioned Krylov path for non-symmetric matrices
@@ -157,17 +251,53 @@ impl LinearSolver {
     ) -> Result<Factorization, LinearSolveError> {
         let n = self.dimension();
         self.last_krylov_iterations = 0;
+        self.stats.solves += 1;
         for (i, v) in rhs.iter().enumerate() {
             self.rhs[(i, 0)] = *v;
         }
+        let mode = match self.mode {
+            LinearMode::Auto if n > AUTO_ITERATIVE_ABOVE => LinearMode::Iterative,
+            LinearMode::Auto => LinearMode::Direct,
+            m => m,
+        };
         let mut used = None;
-        if symmetric {
-            if self.factor_cholesky(values)? {
-                self.cholesky_solve_rhs();
-                used = Some(Factorization::Cholesky);
+        // Reuse the kept factor (of an earlier Hessian) as a preconditioner
+        // while it pays: a few Krylov iterations instead of a factorisation.
+        if mode == LinearMode::Reuse
+            && self.factor_kept
+            && self.gmres(values, rhs, Preconditioner::Cholesky, REUSE_ITERATIONS)?
+        {
+            used = Some(Factorization::ReusedFactorGmres);
+        }
+        if used.is_none() && mode == LinearMode::Iterative {
+            if self.factor_block_jacobi(values)
+                && self.gmres(
+                    values,
+                    rhs,
+                    Preconditioner::BlockJacobi,
+                    ITERATIVE_ITERATIONS,
+                )?
+            {
+                used = Some(Factorization::BlockJacobiGmres);
             }
-        } else if self.transpose.is_some() && self.gmres(values, rhs)? {
-            used = Some(Factorization::PreconditionedGmres);
+        } else if used.is_none() {
+            self.factor_kept = self.factor_symmetric_part(values, symmetric)?;
+            if self.factor_kept {
+                if symmetric {
+                    for (i, v) in rhs.iter().enumerate() {
+                        self.rhs[(i, 0)] = *v;
+                    }
+                    self.cholesky_solve_rhs();
+                    used = Some(Factorization::Cholesky);
+                } else if self.gmres(values, rhs, Preconditioner::Cholesky, 100)? {
+                    used = Some(Factorization::PreconditionedGmres);
+                }
+            }
+        }
+        if used.is_none() {
+            // LU overwrote nothing we keep, but the Cholesky storage may hold
+            // an indefinite attempt: do not reuse it.
+            self.factor_kept = false;
         }
         let used = match used {
             Some(u) => u,
@@ -199,6 +329,8 @@ impl LinearSolver {
                         Factorization::Cholesky => "Cholesky",
                         Factorization::Lu => "LU",
                         Factorization::PreconditionedGmres => "preconditioned GMRES",
+                        Factorization::ReusedFactorGmres => "GMRES with a reused factor",
+                        Factorization::BlockJacobiGmres => "block-Jacobi GMRES",
                     },
                     residual / b_norm
                 ),
@@ -242,6 +374,7 @@ impl LinearSolver {
                 .or(symb.solve_in_place_scratch::<f64>(1, par))
         };
         self.ensure_memory(req);
+        self.stats.cholesky_factorizations += 1;
         let (symb, l) = self.llt.as_mut().expect("set above");
         let a = SparseColMatRef::new(self.symbolic.as_ref(), values);
         let stack = MemStack::new(&mut self.memory);
@@ -291,31 +424,99 @@ impl LinearSolver {
         }
     }
 
-    /// Restarted GMRES, right-preconditioned by the Cholesky factor `P` of
-    /// the symmetric part `(A + A^T) / 2`: solves `A P^-1 u = b`, `x = P^-1
-    /// u`, to `|b - A x| <= 1e-12 |b|`, so that the result equals a direct
-    /// solve's to well within Newton's tolerance. When the skew part of `A`
-    /// is small against the symmetric part (the wrinkling tangent next to
-    /// the mass term), few iterations are needed. Returns `Ok(false)` (the
-    /// caller then uses LU) when the symmetric part is not positive
-    /// definite or GMRES has not converged in 100 iterations. The solution
-    /// is left in `self.rhs`.
-    fn gmres(&mut self, values: &[f64], b: &[f64]) -> Result<bool, LinearSolveError> {
-        const RESTART: usize = 25;
-        const MAX_ITERATIONS: usize = 100;
-        let n = self.dimension();
-        let transpose = self.transpose.take().expect("checked by the caller");
+    /// Factorises the symmetric part `(A + A^T) / 2` of `values` (`A`
+    /// itself when `symmetric`) by Cholesky, to precondition with.
+    fn factor_symmetric_part(
+        &mut self,
+        values: &[f64],
+        symmetric: bool,
+    ) -> Result<bool, LinearSolveError> {
+        if symmetric {
+            return self.factor_cholesky(values);
+        }
+        let Some(transpose) = self.transpose.take() else {
+            return Ok(false);
+        };
         let mut sym = std::mem::take(&mut self.krylov.symmetric_part);
         sym.resize(values.len(), 0.0);
         for (k, s) in sym.iter_mut().enumerate() {
             *s = 0.5 * (values[k] + values[transpose[k]]);
         }
         self.transpose = Some(transpose);
-        let ok = self.factor_cholesky(&sym)?;
+        let ok = self.factor_cholesky(&sym);
         self.krylov.symmetric_part = sym;
-        if !ok {
-            return Ok(false);
+        ok
+    }
+
+    /// Inverts the 3x3 diagonal blocks of `values` (block-Jacobi
+    /// preconditioner); `false` if one is singular.
+    fn factor_block_jacobi(&mut self, values: &[f64]) -> bool {
+        let n = self.dimension();
+        let (col_ptr, row_idx) = (self.symbolic.col_ptr(), self.symbolic.row_idx());
+        let mut blocks = std::mem::take(&mut self.krylov.blocks);
+        blocks.clear();
+        blocks.resize(n.div_ceil(3), [[0.0; 3]; 3]);
+        for c in 0..n {
+            for k in col_ptr[c]..col_ptr[c + 1] {
+                let r = row_idx[k];
+                if r / 3 == c / 3 {
+                    blocks[c / 3][r % 3][c % 3] = values[k];
+                }
+            }
         }
+        let mut ok = true;
+        for (i, m) in blocks.iter_mut().enumerate() {
+            // Trailing partial block (never for 3 unknowns per node): identity.
+            let size = (n - 3 * i).min(3);
+            for d in size..3 {
+                m[d][d] = 1.0;
+            }
+            match invert3(*m) {
+                Some(inv) => *m = inv,
+                None => ok = false,
+            }
+        }
+        self.krylov.blocks = blocks;
+        ok
+    }
+
+    fn precondition(&mut self, kind: Preconditioner, x: &mut Mat<f64>) {
+        match kind {
+            Preconditioner::Cholesky => self.cholesky_solve(x),
+            Preconditioner::BlockJacobi => {
+                let n = self.dimension();
+                for (i, m) in self.krylov.blocks.iter().enumerate() {
+                    let v: [f64; 3] = [0, 1, 2].map(|d| {
+                        if 3 * i + d < n {
+                            x[(3 * i + d, 0)]
+                        } else {
+                            0.0
+                        }
+                    });
+                    for r in 0..3.min(n - 3 * i) {
+                        x[(3 * i + r, 0)] = m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2];
+                    }
+                }
+            }
+        }
+    }
+
+    /// Restarted GMRES (restart 25), right-preconditioned: solves `A P^-1 u
+    /// = b`, `x = P^-1 u`, to `|b - A x| <= 1e-12 |b|` in at most
+    /// `max_iterations`, so that a converged result equals a direct solve's
+    /// to well within Newton's tolerance. `P` is the current Cholesky
+    /// factor (of this matrix's symmetric part, or of an earlier Hessian's,
+    /// reused) or the block-Jacobi blocks. `Ok(false)` when it has not
+    /// converged. The solution is left in `self.rhs`.
+    fn gmres(
+        &mut self,
+        values: &[f64],
+        b: &[f64],
+        preconditioner: Preconditioner,
+        max_iterations: usize,
+    ) -> Result<bool, LinearSolveError> {
+        const RESTART: usize = 25;
+        let n = self.dimension();
         let b_norm = b.iter().map(|v| v * v).sum::<f64>().sqrt();
         let mut x = vec![0.0; n];
         if b_norm == 0.0 {
@@ -332,7 +533,7 @@ impl LinearSolver {
         let mut ax = vec![0.0; n];
         let mut iterations = 0;
         let mut converged = false;
-        while iterations < MAX_ITERATIONS && !converged {
+        while iterations < max_iterations && !converged {
             // r = b - A x
             self.matvec(values, &x, &mut ax);
             for i in 0..n {
@@ -356,7 +557,7 @@ impl LinearSolver {
                 for i in 0..n {
                     work[(i, 0)] = basis[k][i];
                 }
-                self.cholesky_solve(&mut work);
+                self.precondition(preconditioner, &mut work);
                 let mut z = std::mem::take(&mut self.krylov.z);
                 z.clear();
                 z.extend((0..n).map(|i| work[(i, 0)]));
@@ -395,7 +596,7 @@ impl LinearSolver {
                 g[k] *= cs[k];
                 iterations += 1;
                 k_used = k + 1;
-                if g[k + 1].abs() <= 1e-12 * b_norm || iterations >= MAX_ITERATIONS {
+                if g[k + 1].abs() <= 1e-12 * b_norm || iterations >= max_iterations {
                     break;
                 }
             }
@@ -411,7 +612,7 @@ impl LinearSolver {
             for i in 0..n {
                 work[(i, 0)] = (0..k_used).map(|j| basis[j][i] * y[j]).sum();
             }
-            self.cholesky_solve(&mut work);
+            self.precondition(preconditioner, &mut work);
             for i in 0..n {
                 x[i] += work[(i, 0)];
             }
@@ -429,6 +630,7 @@ impl LinearSolver {
         self.krylov.basis = basis;
         self.krylov.work = work;
         self.last_krylov_iterations = iterations;
+        self.stats.krylov_iterations += iterations;
         for i in 0..n {
             self.rhs[(i, 0)] = x[i];
         }
@@ -448,6 +650,7 @@ impl LinearSolver {
                 .or(symb.solve_in_place_scratch::<f64>(1, par))
         };
         self.ensure_memory(req);
+        self.stats.lu_factorizations += 1;
         let (symb, numeric) = self.lu.as_mut().expect("set above");
         let a = SparseColMatRef::new(self.symbolic.as_ref(), values);
         let stack = MemStack::new(&mut self.memory);

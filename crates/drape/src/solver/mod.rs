@@ -4,6 +4,6 @@ pub mod linear;
 pub mod newton;
 pub mod pattern;
 
-pub use linear::{Factorization, LinearSolveError, LinearSolver};
+pub use linear::{Factorization, LinearMode, LinearSolveError, LinearSolver, LinearStats};
 pub use newton::{NewtonError, NewtonReport, NewtonSettings};
 pub use pattern::SparsePattern;
