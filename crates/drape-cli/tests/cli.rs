@@ -694,11 +694,6 @@ const BAD_INPUTS: &[BadInput] = &[
         line: Some(1),
     },
     BadInput {
-        file: "garbage_scenario.toml",
-        fragments: &["cannot read", "valid UTF-8"],
-        line: None,
-    },
-    BadInput {
         file: "unknown_key.toml",
         fragments: &["unknown field `thicknes`", "thickness"],
         line: Some(13),
@@ -773,10 +768,9 @@ const BAD_INPUTS: &[BadInput] = &[
         fragments: &["`analysis.kind`", "`modal`", "dynamic", "static"],
         line: Some(16),
     },
-    // TODO(lead): the key should carry the index, `load[0].kind` (serde's path drops it; same for `obstacle` in unknown_key_obstacle.toml).
     BadInput {
         file: "unknown_load_kind.toml",
-        fragments: &["kind", "unknown variant `wind`", "pressure"],
+        fragments: &["`load[0].kind`", "unknown variant `wind`", "pressure"],
         line: Some(19),
     },
     // --- NaN, infinite, zero and negative numbers
@@ -1623,70 +1617,52 @@ const BAD_INPUTS: &[BadInput] = &[
         fragments: &["`obstacle[0].path`", "garbage.obj", "no triangles"],
         line: Some(20),
     },
+    BadInput {
+        file: "cylinder_zero_axis.toml",
+        fragments: &["`obstacle[0].axis`", "zero vector"],
+        line: Some(21),
+    },
+    BadInput {
+        file: "cylinder_zero_height.toml",
+        fragments: &["`obstacle[0].height`", "positive", "found 0"],
+        line: Some(23),
+    },
+    BadInput {
+        file: "sphere_nan_center.toml",
+        fragments: &["`obstacle[0].center`", "non-finite", "NaN"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "box_nan_min.toml",
+        fragments: &["`obstacle[0].min`", "non-finite", "NaN"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "plane_infinite_point.toml",
+        fragments: &["`obstacle[0].point`", "non-finite", "inf"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "garbage_scenario.toml",
+        fragments: &["not UTF-8", "invalid byte"],
+        line: Some(2),
+    },
+    BadInput {
+        file: "sphere_between_nodes.toml",
+        fragments: &["`obstacle[0].shape`", "starts interpenetrating the fabric"],
+        line: Some(19),
+    },
+    BadInput {
+        file: "divisions_memory.toml",
+        fragments: &["`mesh.divisions`", "[4000, 4000]", "16008001 nodes"],
+        line: Some(7),
+    },
 ];
-
-// Cases the library does not handle yet (see BAD_INPUTS_PENDING).
-// TODO(lead): names `obstacle[0].radius` (line 22) for a zero axis: the obstacle error's key is dropped in build_contact.
-// BadInput {
-//     file: "cylinder_zero_axis.toml",
-//     fragments: &["`obstacle[0].axis`", "zero vector"],
-//     line: Some(21),
-// },
-// TODO(lead): names `obstacle[0].radius` (line 22) for a zero height.
-// BadInput {
-//     file: "cylinder_zero_height.toml",
-//     fragments: &["`obstacle[0].height`", "positive", "found 0"],
-//     line: Some(23),
-// },
-// TODO(lead): names `obstacle[0].radius` (line 21) for a NaN centre.
-// BadInput {
-//     file: "sphere_nan_center.toml",
-//     fragments: &["`obstacle[0].center`", "non-finite", "NaN"],
-//     line: Some(20),
-// },
-// TODO(lead): names `obstacle[0].max` (line 21) for a NaN min.
-// BadInput {
-//     file: "box_nan_min.toml",
-//     fragments: &["`obstacle[0].min`", "non-finite", "NaN"],
-//     line: Some(20),
-// },
-// TODO(lead): names `obstacle[0].normal` (line 21) for an infinite point.
-// BadInput {
-//     file: "plane_infinite_point.toml",
-//     fragments: &["`obstacle[0].point`", "non-finite", "inf"],
-//     line: Some(20),
-// },
-// TODO(lead): no line for the first invalid byte, and the I/O error is printed twice.
-// BadInput {
-//     file: "garbage_scenario.toml",
-//     fragments: &["valid UTF-8"],
-//     line: Some(2),
-// },
-// TODO(lead): accepted (exit 0, the run completes): only nodes are tested, and none is inside the sphere.
-// BadInput {
-//     file: "sphere_between_nodes.toml",
-//     fragments: &["`obstacle[0].shape`", "starts interpenetrating the fabric"],
-//     line: Some(19),
-// },
-// TODO(lead): accepted by the 2e7-node limit, but `drape check` alone needs ~25 GB and minutes.
-// BadInput {
-//     file: "divisions_memory.toml",
-//     fragments: &["`mesh.divisions`", "[4000, 4000]", "16008001 nodes"],
-//     line: Some(7),
-// },
 
 /// Files of tests/bad_inputs whose case is commented out `// TODO(lead):`
 /// above, waiting for a library fix; they are not run. Move a case back into
 /// BAD_INPUTS (and out of this list) once the library gives its message.
-const BAD_INPUTS_PENDING: &[&str] = &[
-    "cylinder_zero_axis.toml",
-    "cylinder_zero_height.toml",
-    "sphere_nan_center.toml",
-    "box_nan_min.toml",
-    "plane_infinite_point.toml",
-    "sphere_between_nodes.toml",
-    "divisions_memory.toml",
-];
+const BAD_INPUTS_PENDING: &[&str] = &[];
 
 /// Runs `drape ARGS` in `cwd` like [`drape`], but with its output captured
 /// in files next to `log` (so that no pipe can fill up), killed after

@@ -15,9 +15,11 @@ use crate::model::Model;
 use crate::solver::NewtonSettings;
 use std::path::{Path, PathBuf};
 
-/// Most nodes a generated mesh may have (a guard against typos such as
-/// `divisions = [200000, 200000]`, which would exhaust memory).
-const MAX_GENERATED_NODES: usize = 20_000_000;
+/// Most nodes a generated mesh may have: a guard against typos such as
+/// `divisions = [20000, 20000]`, which would exhaust memory (a run needs
+/// about 1.6 kB per node with a direct solver; 3 million nodes, 6 million
+/// T3 elements, is ~5 GB).
+const MAX_GENERATED_NODES: usize = 3_000_000;
 
 /// A node whose position is recorded in the history.
 #[derive(Debug, Clone, PartialEq)]
@@ -567,8 +569,11 @@ fn build_contact(
             }
         }
         let why = format!("for shape = {:?}", o.shape);
-        let invalid =
-            |key: &str, e: crate::contact::ObstacleError| c.invalid(t, ix, key, e.to_string());
+        // The error's own key when it names one (a zero axis, a NaN centre),
+        // else the key given here.
+        let invalid = |key: &str, e: crate::contact::ObstacleError| {
+            c.invalid(t, ix, e.key().unwrap_or(key), e.to_string())
+        };
         let shape: Box<dyn crate::contact::Obstacle> = match o.shape.as_str() {
             "plane" => Box::new(
                 PlaneObstacle::new(
@@ -648,14 +653,23 @@ fn check_initial_penetration(
 ) -> Result<(), ScenarioError> {
     let (lo, hi) = mesh.bounding_box();
     let size = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt();
+    // Nodes, and the centroids and edge midpoints of the elements' vertex
+    // triangles: an obstacle smaller than an element can sit between nodes.
+    let mut probes: Vec<[f64; 3]> = mesh.nodes.clone();
+    for el in mesh.elements() {
+        let v = [mesh.nodes[el[0]], mesh.nodes[el[1]], mesh.nodes[el[2]]];
+        probes.push([0, 1, 2].map(|i| (v[0][i] + v[1][i] + v[2][i]) / 3.0));
+        for j in 0..3 {
+            let (a, b) = (v[j], v[(j + 1) % 3]);
+            probes.push([0, 1, 2].map(|i| 0.5 * (a[i] + b[i])));
+        }
+    }
     for (k, body) in contact.bodies.iter().enumerate() {
-        let deepest = mesh
-            .nodes
+        let deepest = probes
             .iter()
-            .enumerate()
-            .map(|(p, x)| (p, body.proximity(*x, 0.0, None).gap))
+            .map(|x| (*x, body.proximity(*x, 0.0, None).gap))
             .min_by(|a, b| a.1.total_cmp(&b.1));
-        if let Some((p, gap)) = deepest
+        if let Some((x, gap)) = deepest
             && gap < -1e-3 * size
         {
             return Err(c.invalid(
@@ -663,9 +677,8 @@ fn check_initial_penetration(
                 Some(k),
                 "shape",
                 format!(
-                    "({}) starts interpenetrating the fabric: node {p} at {:?} is {:.4e} m inside it; move the obstacle or the mesh",
+                    "({}) starts interpenetrating the fabric: the fabric's point {x:?} is {:.4e} m inside it; move the obstacle or the mesh",
                     body.shape.describe(),
-                    mesh.nodes[p],
                     -gap
                 ),
             ));

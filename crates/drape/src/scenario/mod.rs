@@ -20,12 +20,12 @@ use std::path::{Path, PathBuf};
 #[non_exhaustive]
 pub enum ScenarioError {
     /// The file could not be read.
-    #[error("{file}: cannot read: {source}")]
+    #[error("{file}: cannot read: {error}")]
     Io {
         /// The scenario file.
         file: PathBuf,
         /// The I/O error.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// TOML syntax, unknown key, wrong type or missing key.
     #[error("{file}{}: {message}", line.map(|l| format!(", line {l}")).unwrap_or_default())]
@@ -431,13 +431,40 @@ pub struct MonitorSpec {
     pub at: [f64; 3],
 }
 
+/// Adds the array index to a key path such as `load.kind` (an array of
+/// tables) from the error's line: the number of `[[load]]` headers before it.
+fn index_key(source: &str, key: &str, line: Option<usize>) -> String {
+    let (Some(line), Some((table, rest))) = (line, key.split_once('.')) else {
+        return key.to_string();
+    };
+    let header = format!("[[{table}]]");
+    let count = source
+        .lines()
+        .take(line)
+        .filter(|l| l.trim_start().starts_with(&header))
+        .count();
+    if count == 0 || !["load", "fix", "obstacle", "monitor"].contains(&table) {
+        return key.to_string();
+    }
+    format!("{table}[{}].{rest}", count - 1)
+}
+
 impl Scenario {
     /// Reads and parses a scenario file (types and unknown keys checked;
     /// ranges are checked by [`Scenario::build`]).
     pub fn read(path: &Path) -> Result<(Self, String), ScenarioError> {
-        let source = std::fs::read_to_string(path).map_err(|e| ScenarioError::Io {
+        let bytes = std::fs::read(path).map_err(|e| ScenarioError::Io {
             file: path.to_path_buf(),
-            source: e,
+            error: e,
+        })?;
+        let source = String::from_utf8(bytes).map_err(|e| {
+            let at = e.utf8_error().valid_up_to();
+            let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+            ScenarioError::Parse {
+                file: path.to_path_buf(),
+                line: Some(line),
+                message: format!("the file is not UTF-8 text (invalid byte at offset {at})"),
+            }
         })?;
         let scenario = Self::parse(&source, path)?;
         Ok((scenario, source))
@@ -461,7 +488,7 @@ impl Scenario {
                 .and_then(|k| k.strip_suffix('`'))
                 && !key.is_empty()
             {
-                message = format!("`{key}`: {message}");
+                message = format!("`{}`: {message}", index_key(source, key, line));
             }
             ScenarioError::Parse {
                 file: path.to_path_buf(),

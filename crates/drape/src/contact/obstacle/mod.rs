@@ -538,6 +538,20 @@ pub(crate) mod testing {
     }
 }
 
+impl ObstacleError {
+    /// The scenario key the error is about, when it is one value
+    /// (`None` for mesh-file errors, which are about `path`).
+    pub fn key(&self) -> Option<&'static str> {
+        match self {
+            Self::NonFinite { key, .. }
+            | Self::ZeroVector { key, .. }
+            | Self::NonPositive { key, .. } => Some(key),
+            Self::EmptyBox { .. } => Some("max"),
+            _ => None,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
