@@ -30,6 +30,9 @@ impl Shared {
 /// Elements per parallel work item.
 const CHUNK: usize = 256;
 
+/// Meshes with fewer elements are assembled on one thread.
+const PARALLEL_ABOVE: usize = 4096;
+
 /// Per-thread scratch for one element.
 struct Local {
     y: [[f64; 3]; MAX_NODES],
@@ -117,9 +120,7 @@ impl Model {
             // Fixed chunks, their partial energies summed in order: the
             // result does not depend on how rayon schedules the work
             // (resumed runs reproduce uninterrupted ones to the bit).
-            energy += colour
-                .par_chunks(CHUNK)
-                .map_init(Local::new, |local, chunk| {
+            let work = |local: &mut Local, chunk: &[usize]| -> f64 {
                     let mut sum = 0.0;
                     for &e in chunk {
                         let el = self.mesh.element(e);
@@ -181,10 +182,20 @@ impl Model {
                         sum += u;
                     }
                     sum
-                })
-                .collect::<Vec<f64>>()
-                .iter()
-                .sum::<f64>();
+            };
+            // Small meshes: threads cost more than they save (a colour of
+            // a 20x20 fabric is ~120 elements, ~25 us of work).
+            energy += if self.mesh.element_count() < PARALLEL_ABOVE {
+                let mut local = Local::new();
+                colour.chunks(CHUNK).map(|chunk| work(&mut local, chunk)).sum::<f64>()
+            } else {
+                colour
+                    .par_chunks(CHUNK)
+                    .map_init(Local::new, work)
+                    .collect::<Vec<f64>>()
+                    .iter()
+                    .sum::<f64>()
+            };
         }
         energy
     }

@@ -1,0 +1,555 @@
+//! Time histories of `history.csv` as line plots (plotters, bitmap backend,
+//! drawn at twice the size and box-filtered down for anti-aliased lines).
+
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use crate::colormap::WRINKLE_COLOURS;
+use crate::error::{RenderError, Result};
+use crate::field::format_value;
+use crate::image::RgbImage;
+use crate::outdir::History;
+
+/// What [`plot`] drew.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlotReport {
+    /// The file written (`None` from [`plot_image`]).
+    pub output: Option<PathBuf>,
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// Rows of `history.csv` plotted.
+    pub rows: usize,
+    /// Titles of the panels, in reading order.
+    pub panels: Vec<String>,
+    /// Names of the monitors plotted.
+    pub monitors: Vec<String>,
+}
+
+const SS: u32 = 2;
+
+fn register_fonts() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The embedded fonts are checked to parse by a test; a failure here
+        // would only leave plotters without text.
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            crate::text::REGULAR_BYTES,
+        );
+        let _ =
+            plotters::style::register_font("sans-serif", FontStyle::Bold, crate::text::BOLD_BYTES);
+    });
+}
+
+/// Plots the history of the output directory `dir` to the PNG `out`:
+/// monitored z, energies, Newton iterations, contact force, wrinkling state
+/// fractions and the smallest gap, against time.
+///
+/// # Errors
+/// [`RenderError::Io`] / [`RenderError::Format`] for a missing or malformed
+/// `history.csv`, [`RenderError::InvalidOption`] for a bad size or an
+/// output that is not `.png`, [`RenderError::Encode`] if drawing fails.
+pub fn plot(dir: &Path, out: &Path, width: u32, height: u32) -> Result<PlotReport> {
+    let ext = out
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if ext != "png" {
+        return Err(RenderError::InvalidOption(format!(
+            "{}: plots are written as PNG (.png)",
+            out.display()
+        )));
+    }
+    let (img, mut report) = plot_image(dir, width, height)?;
+    img.write_png(out)?;
+    report.output = Some(out.to_owned());
+    Ok(report)
+}
+
+/// As [`plot`], into memory.
+///
+/// # Errors
+/// As [`plot`], except for writing.
+pub fn plot_image(dir: &Path, width: u32, height: u32) -> Result<(RgbImage, PlotReport)> {
+    if !(320..=10_000).contains(&width) || !(240..=10_000).contains(&height) {
+        return Err(RenderError::InvalidOption(format!(
+            "plot size {width}x{height}: width must be 320–10000 and height 240–10000 pixels"
+        )));
+    }
+    let dir = if dir.extension().is_some_and(|e| e == "pvd") {
+        dir.parent().unwrap_or(Path::new("."))
+    } else {
+        dir
+    };
+    if !dir.is_dir() {
+        return Err(RenderError::io(
+            dir,
+            std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "not a directory (expected a drape output directory)",
+            ),
+        ));
+    }
+    let hist = History::read(dir)?;
+    let path = dir.join("history.csv");
+    let time = hist
+        .column("time")
+        .ok_or_else(|| RenderError::format(&path, "no time column"))?
+        .to_vec();
+    if time.is_empty() {
+        return Err(RenderError::format(&path, "no rows to plot"));
+    }
+    let title = std::fs::read_to_string(dir.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v.get("title")?.as_str().map(str::to_owned))
+        .unwrap_or_else(|| {
+            dir.file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        });
+    register_fonts();
+
+    let monitors = hist.monitors();
+    let col = |name: &str| hist.column(name).map(<[f64]>::to_vec);
+    let mut panels: Vec<Panel> = Vec::new();
+
+    let mut mon = Panel::new("Monitored nodes: height", "z (m)");
+    for (k, name) in monitors.iter().enumerate() {
+        if let Some(z) = col(&format!("{name}_z")) {
+            mon.series.push(Series::line(name, z, palette(k)));
+        }
+    }
+    if mon.series.is_empty() {
+        mon.empty_note = Some("no [[monitor]] in the scenario".to_owned());
+    }
+    panels.push(mon);
+
+    let mut en = Panel::new("Energies", "energy (J)");
+    for (k, (c, label)) in [
+        ("kinetic_energy", "kinetic"),
+        ("strain_energy", "strain"),
+        ("contact_energy", "contact (penalty)"),
+        ("external_work", "work of the loads"),
+        ("total_energy", "total = K + U + C − W"),
+    ]
+    .iter()
+    .enumerate()
+    {
+        if let Some(v) = col(c) {
+            if *c == "contact_energy" && v.iter().all(|&x| x == 0.0) {
+                continue;
+            }
+            let mut s = Series::line(label, v, palette(k));
+            if *c == "total_energy" {
+                s.dashed = true;
+                s.color = RGBColor(30, 30, 30);
+            }
+            en.series.push(s);
+        }
+    }
+    panels.push(en);
+
+    let mut it = Panel::new("Newton iterations per step", "iterations");
+    if let Some(step) = col("step") {
+        it.x = Some(("step", step));
+    }
+    if let Some(v) = col("iterations") {
+        let mut s = Series::line("iterations", v, palette(0));
+        s.points = true;
+        it.series.push(s);
+        it.integer_y = true;
+    }
+    if let Some(c) = col("cutbacks")
+        && c.iter().any(|&x| x > 0.0)
+    {
+        it.series.push(Series {
+            name: "cutbacks (step halvings)".to_owned(),
+            values: c,
+            color: RGBColor(214, 39, 40),
+            dashed: false,
+            points: true,
+            skip_zero: true,
+        });
+    }
+    it.legend = it.series.len() > 1;
+    panels.push(it);
+
+    let has_obstacles = col("min_gap").is_some_and(|v| v.iter().any(|x| x.is_finite()));
+    let mut cf = Panel::new("Contact force (resultant on the fabric)", "force (N)");
+    match col("contact_force") {
+        Some(v) if has_obstacles => cf.series.push(Series::line("contact force", v, palette(0))),
+        _ => cf.empty_note = Some("no obstacles".to_owned()),
+    }
+    cf.legend = false;
+    panels.push(cf);
+
+    let mut ws = Panel::new("Wrinkling state (fraction of elements)", "fraction");
+    for (k, (c, label)) in [
+        ("taut_fraction", "taut"),
+        ("wrinkled_fraction", "wrinkled"),
+        ("slack_fraction", "slack"),
+    ]
+    .iter()
+    .enumerate()
+    {
+        if let Some(v) = col(c) {
+            let [r, g, b] = WRINKLE_COLOURS[k];
+            ws.series.push(Series::line(label, v, RGBColor(r, g, b)));
+        }
+    }
+    ws.fixed_y = Some((0.0, 1.0));
+    if ws.series.is_empty() {
+        ws.empty_note = Some("no state fractions in history.csv".to_owned());
+    }
+    panels.push(ws);
+
+    let mut gap = Panel::new("Smallest gap to an obstacle", "gap (m)");
+    if let Some(v) = col("min_gap")
+        && has_obstacles
+    {
+        gap.series.push(Series::line("min gap", v, palette(0)));
+        gap.zero_line = true;
+    } else {
+        gap.empty_note = Some("no obstacles".to_owned());
+    }
+    gap.legend = false;
+    panels.push(gap);
+
+    let titles: Vec<String> = panels.iter().map(|p| p.title.clone()).collect();
+    let (bw, bh) = (width * SS, height * SS);
+    let mut buf = vec![255u8; bw as usize * bh as usize * 3];
+    draw_all(&mut buf, (bw, bh), &title, &time, &panels).map_err(|message| {
+        RenderError::Encode {
+            path: dir.join("history.csv"),
+            message,
+        }
+    })?;
+    let img = downsample(&buf, bw as usize, bh as usize, SS as usize);
+    let report = PlotReport {
+        output: None,
+        width,
+        height,
+        rows: time.len(),
+        panels: titles,
+        monitors,
+    };
+    Ok((img, report))
+}
+
+fn palette(k: usize) -> RGBColor {
+    let c = colorous::TABLEAU10[k % colorous::TABLEAU10.len()];
+    RGBColor(c.r, c.g, c.b)
+}
+
+struct Series {
+    name: String,
+    values: Vec<f64>,
+    color: RGBColor,
+    dashed: bool,
+    /// Dots instead of a line.
+    points: bool,
+    /// Leave zeros out (dots only).
+    skip_zero: bool,
+}
+
+impl Series {
+    fn line(name: &str, values: Vec<f64>, color: RGBColor) -> Self {
+        Self {
+            name: name.to_owned(),
+            values,
+            color,
+            dashed: false,
+            points: false,
+            skip_zero: false,
+        }
+    }
+}
+
+struct Panel {
+    title: String,
+    /// Abscissa other than time: its name and values.
+    x: Option<(&'static str, Vec<f64>)>,
+    y_desc: String,
+    series: Vec<Series>,
+    legend: bool,
+    integer_y: bool,
+    zero_line: bool,
+    fixed_y: Option<(f64, f64)>,
+    empty_note: Option<String>,
+}
+
+impl Panel {
+    fn new(title: &str, y_desc: &str) -> Self {
+        Self {
+            title: title.to_owned(),
+            x: None,
+            y_desc: y_desc.to_owned(),
+            series: Vec::new(),
+            legend: true,
+            integer_y: false,
+            zero_line: false,
+            fixed_y: None,
+            empty_note: None,
+        }
+    }
+}
+
+fn y_range(p: &Panel) -> (f64, f64) {
+    if let Some(r) = p.fixed_y {
+        return (r.0 - 0.02, r.1 + 0.02);
+    }
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for s in &p.series {
+        for &v in &s.values {
+            if v.is_finite() {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+    }
+    if p.zero_line {
+        lo = lo.min(0.0);
+        hi = hi.max(0.0);
+    }
+    if p.integer_y {
+        return (0.0, (hi.max(1.0) + 1.0).ceil());
+    }
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    if hi - lo <= 1e-300 || hi - lo <= 1e-12 * hi.abs().max(lo.abs()) {
+        let d = if lo == 0.0 { 1.0 } else { 0.1 * lo.abs() };
+        return (lo - d, hi + d);
+    }
+    let pad = 0.06 * (hi - lo);
+    (lo - pad, hi + pad)
+}
+
+fn draw_all(
+    buf: &mut [u8],
+    size: (u32, u32),
+    title: &str,
+    time: &[f64],
+    panels: &[Panel],
+) -> std::result::Result<(), String> {
+    let e = |x: &dyn std::fmt::Display| x.to_string();
+    let (w, h) = size;
+    let u = (h.min(w * 3 / 4) as f64 / 900.0 / SS as f64).clamp(0.5, 4.0) * SS as f64;
+    let px = |v: f64| (v * u).round().max(1.0) as u32;
+    let root = BitMapBackend::with_buffer(buf, size).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let title_h = px(46.0);
+    let (top, rest) = root.split_vertically(title_h);
+    top.draw(&Text::new(
+        format!("{title} — time histories"),
+        (px(16.0) as i32, px(12.0) as i32),
+        ("sans-serif", px(22.0) as f64, FontStyle::Bold)
+            .into_font()
+            .color(&RGBColor(20, 20, 20)),
+    ))
+    .map_err(|x| e(&x))?;
+    let areas = rest.split_evenly((3, 2));
+    for (area, p) in areas.iter().zip(panels) {
+        let (x_desc, x) = match &p.x {
+            Some((name, v)) => (*name, v.as_slice()),
+            None => ("time (s)", time),
+        };
+        draw_panel(area, p, x_desc, x, &px).map_err(|x| e(&x))?;
+    }
+    root.present().map_err(|x| e(&x))?;
+    Ok(())
+}
+
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    p: &Panel,
+    x_desc: &str,
+    time: &[f64],
+    px: &dyn Fn(f64) -> u32,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let (y0, y1) = y_range(p);
+    let (t0, t1) = match crate::field::finite_range(time) {
+        Some((a, b)) if b > a => (a, b),
+        Some((a, _)) => (a, a + 1.0),
+        None => (0.0, 1.0),
+    };
+    let dark = RGBColor(30, 30, 30);
+    let mut chart = ChartBuilder::on(area)
+        .caption(
+            &p.title,
+            ("sans-serif", px(17.0) as f64, FontStyle::Bold)
+                .into_font()
+                .color(&dark),
+        )
+        .margin(px(10.0))
+        .margin_right(px(22.0))
+        .x_label_area_size(px(44.0))
+        .y_label_area_size(px(78.0))
+        .build_cartesian_2d(t0..t1, y0..y1)?;
+    let label_font = ("sans-serif", px(13.0) as f64).into_font().color(&dark);
+    let desc_font = ("sans-serif", px(14.0) as f64).into_font().color(&dark);
+    // Tick values that are round-off away from zero print as 0.
+    let x_fmt = |v: &f64| format_value(snap(*v, t1 - t0));
+    let y_fmt = |v: &f64| format_value(snap(*v, y1 - y0));
+    let int_fmt = |v: &f64| format!("{}", v.round() as i64);
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(x_desc)
+        .y_desc(p.y_desc.as_str())
+        .label_style(label_font.clone())
+        .axis_desc_style(desc_font)
+        .x_labels(7)
+        .y_labels(6)
+        .x_label_formatter(&x_fmt)
+        .light_line_style(RGBColor(240, 240, 240))
+        .bold_line_style(RGBColor(222, 222, 222))
+        .axis_style(ShapeStyle {
+            color: RGBColor(90, 90, 90).to_rgba(),
+            filled: false,
+            stroke_width: px(1.0),
+        });
+    if p.integer_y {
+        mesh.y_label_formatter(&int_fmt);
+    } else {
+        mesh.y_label_formatter(&y_fmt);
+    }
+    mesh.draw()?;
+    if p.zero_line && y0 < 0.0 && y1 > 0.0 {
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![(t0, 0.0), (t1, 0.0)],
+            ShapeStyle {
+                color: RGBColor(150, 150, 150).to_rgba(),
+                filled: false,
+                stroke_width: px(1.0),
+            },
+        )))?;
+    }
+    let stroke = px(1.8);
+    for s in &p.series {
+        let style = ShapeStyle {
+            color: s.color.to_rgba(),
+            filled: false,
+            stroke_width: stroke,
+        };
+        let pts: Vec<(f64, f64)> = time
+            .iter()
+            .zip(&s.values)
+            .filter(|(t, v)| t.is_finite() && v.is_finite())
+            .map(|(&t, &v)| (t, v))
+            .collect();
+        let legend_style = style;
+        // Polylines are drawn segment by segment: plotters joins thick
+        // polylines with unbounded miters, which spike out of the panel at
+        // sharp turns.
+        let anno = if s.points {
+            let r = px(1.6);
+            chart.draw_series(
+                pts.iter()
+                    .filter(|(_, v)| !s.skip_zero || *v != 0.0)
+                    .map(|&(t, v)| Circle::new((t, v), r, style.filled())),
+            )?
+        } else if s.dashed {
+            chart.draw_series(DashedLineSeries::new(pts, px(7.0), px(5.0), style))?
+        } else {
+            chart.draw_series(
+                pts.windows(2)
+                    .map(|w| PathElement::new(vec![w[0], w[1]], style)),
+            )?
+        };
+        let len = px(22.0) as i32;
+        anno.label(s.name.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + len, y)], legend_style));
+    }
+    if p.legend && !p.series.is_empty() {
+        chart
+            .configure_series_labels()
+            .position(legend_corner(p, time, (t0, t1), (y0, y1)))
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(190, 190, 190))
+            .label_font(label_font)
+            .legend_area_size(px(30.0) as i32)
+            .margin(px(8.0))
+            .draw()?;
+    }
+    if let Some(note) = &p.empty_note {
+        let style = ("sans-serif", px(15.0) as f64)
+            .into_font()
+            .color(&RGBColor(120, 120, 120))
+            .pos(Pos::new(HPos::Center, VPos::Center));
+        chart.plotting_area().draw(&Text::new(
+            note.clone(),
+            (0.5 * (t0 + t1), 0.5 * (y0 + y1)),
+            style,
+        ))?;
+    }
+    Ok(())
+}
+
+/// `v`, or 0 if it is round-off next to the axis span `span`.
+fn snap(v: f64, span: f64) -> f64 {
+    if v.abs() < 1e-9 * span.abs() { 0.0 } else { v }
+}
+
+/// The corner of the plot with the fewest data points under a legend-sized
+/// box.
+fn legend_corner(
+    p: &Panel,
+    x: &[f64],
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> SeriesLabelPosition {
+    let (bw, bh) = (0.38, 0.12 + 0.09 * p.series.len() as f64);
+    let corners = [
+        (SeriesLabelPosition::UpperRight, 1.0 - bw, 1.0 - bh),
+        (SeriesLabelPosition::UpperLeft, 0.0, 1.0 - bh),
+        (SeriesLabelPosition::LowerRight, 1.0 - bw, 0.0),
+        (SeriesLabelPosition::LowerLeft, 0.0, 0.0),
+    ];
+    let mut best = (usize::MAX, SeriesLabelPosition::UpperRight);
+    for (pos, cx, cy) in corners {
+        let mut hits = 0;
+        for s in &p.series {
+            for (&t, &v) in x.iter().zip(&s.values) {
+                let u = (t - x0) / (x1 - x0);
+                let w = (v - y0) / (y1 - y0);
+                if u >= cx - 0.02 && u <= cx + bw + 0.02 && w >= cy - 0.02 && w <= cy + bh + 0.02 {
+                    hits += 1;
+                }
+            }
+        }
+        if hits < best.0 {
+            best = (hits, pos);
+        }
+    }
+    best.1
+}
+
+fn downsample(buf: &[u8], w: usize, h: usize, f: usize) -> RgbImage {
+    let (ow, oh) = (w / f, h / f);
+    let mut img = RgbImage::new(ow as u32, oh as u32);
+    let n = (f * f) as u32;
+    for y in 0..oh {
+        for x in 0..ow {
+            let mut acc = [0u32; 3];
+            for sy in 0..f {
+                for sx in 0..f {
+                    let i = 3 * ((y * f + sy) * w + x * f + sx);
+                    for k in 0..3 {
+                        acc[k] += buf[i + k] as u32;
+                    }
+                }
+            }
+            img.put(x, y, acc.map(|a| ((a + n / 2) / n) as u8));
+        }
+    }
+    img
+}
