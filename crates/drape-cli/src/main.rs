@@ -202,7 +202,7 @@ fn run(
         let bar = ProgressBar::new(1000);
         bar.set_style(
             ProgressStyle::with_template(
-                "{bar:30.cyan/blue} t = {msg} [{elapsed_precise} elapsed, {eta} left]",
+                "{bar:30.cyan/blue} {pos}/{len} steps, t = {msg} [{elapsed_precise} elapsed, {eta} left]",
             )
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
@@ -228,7 +228,10 @@ fn run(
             info.strain_energy
         );
         if let Some(bar) = &bar {
-            bar.set_position((1000.0 * info.time / info.end_time).round() as u64);
+            // Progress in scheduled steps: they, not simulated time, cost
+            // the wall time.
+            bar.set_length(info.scheduled_total as u64);
+            bar.set_position(info.scheduled_done as u64);
             bar.set_message(format!(
                 "{:.4e} s, step {}, Newton {}{}",
                 info.time,

@@ -245,7 +245,6 @@ pub(crate) struct Style {
 
 const OBSTACLE_GREY: [f32; 3] = [0.70, 0.70, 0.70];
 const EDGE_COLOUR: [f32; 3] = [0.08, 0.08, 0.08];
-const EDGE_COLOUR_ON_DARK: [f32; 3] = [0.85, 0.85, 0.85];
 const EDGE_ALPHA: f32 = 0.45;
 
 impl Buffer {
@@ -332,15 +331,11 @@ impl Buffer {
                     let ws = [w0, w1, w2];
                     let near = (0..3).any(|i| t.edges & (1 << i) != 0 && ws[i] * alt[i] < hw);
                     if near {
-                        // Dark lines, light ones on the darkest colours.
-                        let lum = 0.30 * col[0] + 0.59 * col[1] + 0.11 * col[2];
-                        let (target, alpha) = if lum < 0.16 {
-                            (EDGE_COLOUR_ON_DARK, 0.30)
-                        } else {
-                            (EDGE_COLOUR, EDGE_ALPHA)
-                        };
+                        // Dark lines throughout (as ParaView draws them):
+                        // switching to light lines on dark colours makes
+                        // lines change colour halfway along.
                         for k in 0..3 {
-                            col[k] = col[k] * (1.0 - alpha) + target[k] * alpha;
+                            col[k] = col[k] * (1.0 - EDGE_ALPHA) + EDGE_COLOUR[k] * EDGE_ALPHA;
                         }
                     }
                 }

@@ -121,73 +121,76 @@ impl Model {
             // result does not depend on how rayon schedules the work
             // (resumed runs reproduce uninterrupted ones to the bit).
             let work = |local: &mut Local, chunk: &[usize]| -> f64 {
-                    let mut sum = 0.0;
-                    for &e in chunk {
-                        let el = self.mesh.element(e);
-                        for (a, &node) in el.iter().enumerate() {
-                            local.y[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
-                        }
-                        let (grad, weight) = self.geometry.element(e);
+                let mut sum = 0.0;
+                for &e in chunk {
+                    let el = self.mesh.element(e);
+                    for (a, &node) in el.iter().enumerate() {
+                        local.y[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
+                    }
+                    let (grad, weight) = self.geometry.element(e);
+                    let k = want_h.then_some(&mut local.k[..m * m]);
+                    let u = element_force_hessian(
+                        material,
+                        self.section,
+                        &local.y[..n],
+                        grad,
+                        weight,
+                        &mut local.f[..m],
+                        k,
+                    );
+                    if pressure != 0.0 {
+                        local.fp[..m].fill(0.0);
                         let k = want_h.then_some(&mut local.k[..m * m]);
-                        let u = element_force_hessian(
-                            material,
-                            self.section,
+                        add_pressure_force(
+                            pressure,
                             &local.y[..n],
-                            grad,
-                            weight,
-                            &mut local.f[..m],
+                            &self.pressure_quadrature,
+                            &mut local.fp[..m],
                             k,
+                            -1.0,
                         );
-                        if pressure != 0.0 {
-                            local.fp[..m].fill(0.0);
-                            let k = want_h.then_some(&mut local.k[..m * m]);
-                            add_pressure_force(
-                                pressure,
-                                &local.y[..n],
-                                &self.pressure_quadrature,
-                                &mut local.fp[..m],
-                                k,
-                                -1.0,
-                            );
-                        }
-                        // SAFETY: the elements of one colour share no node, so
-                        // the entries written below are disjoint across threads.
-                        unsafe {
-                            for (a, &node) in el.iter().enumerate() {
-                                for i in 0..3 {
-                                    fi.add(3 * node + i, local.f[3 * a + i]);
-                                    if pressure != 0.0 {
-                                        fe.add(3 * node + i, local.fp[3 * a + i]);
-                                    }
+                    }
+                    // SAFETY: the elements of one colour share no node, so
+                    // the entries written below are disjoint across threads.
+                    unsafe {
+                        for (a, &node) in el.iter().enumerate() {
+                            for i in 0..3 {
+                                fi.add(3 * node + i, local.f[3 * a + i]);
+                                if pressure != 0.0 {
+                                    fe.add(3 * node + i, local.fp[3 * a + i]);
                                 }
                             }
-                            if want_h {
-                                let blocks = &self.element_blocks[e * n * n..(e + 1) * n * n];
-                                for a in 0..n {
-                                    for (b, &node_b) in el.iter().enumerate() {
-                                        let p = blocks[a * n + b];
-                                        for i in 0..3 {
-                                            let row = (3 * a + i) * m + 3 * b;
-                                            for j in 0..3 {
-                                                h_ptr.add(
-                                                    self.pattern.entry(p, node_b, i, j),
-                                                    local.k[row + j],
-                                                );
-                                            }
+                        }
+                        if want_h {
+                            let blocks = &self.element_blocks[e * n * n..(e + 1) * n * n];
+                            for a in 0..n {
+                                for (b, &node_b) in el.iter().enumerate() {
+                                    let p = blocks[a * n + b];
+                                    for i in 0..3 {
+                                        let row = (3 * a + i) * m + 3 * b;
+                                        for j in 0..3 {
+                                            h_ptr.add(
+                                                self.pattern.entry(p, node_b, i, j),
+                                                local.k[row + j],
+                                            );
                                         }
                                     }
                                 }
                             }
                         }
-                        sum += u;
                     }
-                    sum
+                    sum += u;
+                }
+                sum
             };
             // Small meshes: threads cost more than they save (a colour of
             // a 20x20 fabric is ~120 elements, ~25 us of work).
             energy += if self.mesh.element_count() < PARALLEL_ABOVE {
                 let mut local = Local::new();
-                colour.chunks(CHUNK).map(|chunk| work(&mut local, chunk)).sum::<f64>()
+                colour
+                    .chunks(CHUNK)
+                    .map(|chunk| work(&mut local, chunk))
+                    .sum::<f64>()
             } else {
                 colour
                     .par_chunks(CHUNK)

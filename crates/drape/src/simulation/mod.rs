@@ -40,6 +40,11 @@ pub struct StepInfo {
     pub time: f64,
     /// End time of the schedule (s), or 1 in statics.
     pub end_time: f64,
+    /// Scheduled steps completed, counting this one (cut-back sub-steps
+    /// belong to their scheduled step).
+    pub scheduled_done: usize,
+    /// Scheduled steps in all.
+    pub scheduled_total: usize,
     /// Size of this step.
     pub dt: f64,
     /// Newton iterations of this step.
@@ -523,6 +528,8 @@ pub fn run_with(
                             step,
                             time: state.time,
                             end_time,
+                            scheduled_done: k,
+                            scheduled_total: schedule.iter().map(|(n, _)| n).sum(),
                             dt: h,
                             iterations: outcome.newton.iterations,
                             cutbacks: depth,
