@@ -60,6 +60,68 @@ enum Command {
         /// The scenario file (TOML).
         scenario: PathBuf,
     },
+    /// Render the fabric of an output directory: a PNG of one frame, a grid
+    /// of frames with a shared colour scale, or a GIF of the whole run.
+    ///
+    /// Filled triangles coloured by a field (default: vertical displacement),
+    /// depth-tested, anti-aliased, with a colour bar; the obstacles of
+    /// DIR/scenario.toml in grey.
+    Render {
+        /// The output directory of a run (or its fields.pvd).
+        dir: PathBuf,
+        /// The frame of this step [default: the last].
+        #[arg(long, conflicts_with = "time")]
+        step: Option<u64>,
+        /// The frame nearest this time (s).
+        #[arg(long)]
+        time: Option<f64>,
+        /// Camera: top, side or perspective.
+        #[arg(long, default_value = "perspective", value_parser = ["top", "side", "perspective"])]
+        view: String,
+        /// displacement_z, displacement, velocity, contact_force,
+        /// principal_stress_max, principal_stress_min or wrinkle_state.
+        #[arg(long, default_value = "displacement_z")]
+        field: String,
+        /// A panel of frames from the first to the last, one colour scale.
+        #[arg(long, conflicts_with_all = ["animate", "step", "time"])]
+        grid: bool,
+        /// Panels of --grid.
+        #[arg(long, default_value_t = 6)]
+        panels: usize,
+        /// Every written frame into a GIF.
+        #[arg(long)]
+        animate: bool,
+        /// Delay between animation frames (ms).
+        #[arg(long, default_value_t = 100)]
+        delay_ms: u32,
+        /// Output file [default: DIR/render.png, DIR/render-grid.png or DIR/animation.gif].
+        #[arg(short = 'o', long)]
+        output: Option<PathBuf>,
+        /// Draw the obstacles of this scenario [default: DIR/scenario.toml].
+        #[arg(long)]
+        scenario: Option<PathBuf>,
+        /// Do not draw obstacles.
+        #[arg(long)]
+        no_obstacles: bool,
+        /// Image size WxH [default: 1200x900; 800x600 with --animate].
+        #[arg(long)]
+        size: Option<String>,
+        /// Colour scale limits instead of the field's range.
+        #[arg(long, num_args = 2, value_names = ["MIN", "MAX"], allow_negative_numbers = true)]
+        range: Option<Vec<f64>>,
+    },
+    /// Plot the history of an output directory: monitors' z, energies,
+    /// Newton iterations, contact force, wrinkling states, smallest gap.
+    Plot {
+        /// The output directory of a run.
+        dir: PathBuf,
+        /// Output PNG [default: DIR/plot.png].
+        #[arg(short = 'o', long)]
+        output: Option<PathBuf>,
+        /// Image size WxH [default: 1200x900].
+        #[arg(long)]
+        size: Option<String>,
+    },
     /// List the bundled example scenarios, or print or write one.
     Example {
         /// Example name (as listed); without it, list them.
@@ -94,6 +156,38 @@ fn main() -> ExitCode {
             verbose,
         } => run(scenario, out, resume, quiet, verbose),
         Command::Check { scenario } => check(&scenario),
+        Command::Render {
+            dir,
+            step,
+            time,
+            view,
+            field,
+            grid,
+            panels,
+            animate,
+            delay_ms,
+            output,
+            scenario,
+            no_obstacles,
+            size,
+            range,
+        } => render(RenderArgs {
+            dir,
+            step,
+            time,
+            view,
+            field,
+            grid,
+            panels,
+            animate,
+            delay_ms,
+            output,
+            scenario,
+            no_obstacles,
+            size,
+            range,
+        }),
+        Command::Plot { dir, output, size } => plot(&dir, output, size.as_deref()),
         Command::Example { name, write } => example(name.as_deref(), write.as_deref()),
     };
     match result {
@@ -307,6 +401,86 @@ fn started_with(dir: &Path) -> Result<PathBuf, Failure> {
         ))
     })?;
     Ok(PathBuf::from(text.trim()))
+}
+
+struct RenderArgs {
+    dir: PathBuf,
+    step: Option<u64>,
+    time: Option<f64>,
+    view: String,
+    field: String,
+    grid: bool,
+    panels: usize,
+    animate: bool,
+    delay_ms: u32,
+    output: Option<PathBuf>,
+    scenario: Option<PathBuf>,
+    no_obstacles: bool,
+    size: Option<String>,
+    range: Option<Vec<f64>>,
+}
+
+fn parse_size(size: Option<&str>, default: (u32, u32)) -> Result<(u32, u32), Failure> {
+    let Some(text) = size else { return Ok(default) };
+    text.split_once(['x', 'X'])
+        .and_then(|(w, h)| Some((w.trim().parse().ok()?, h.trim().parse().ok()?)))
+        .filter(|&(w, h): &(u32, u32)| (16..=8192).contains(&w) && (16..=8192).contains(&h))
+        .ok_or_else(|| {
+            Failure::Input(anyhow::anyhow!(
+                "--size {text:?}: expected WxH, e.g. 1200x900 (16 to 8192 each)"
+            ))
+        })
+}
+
+fn render(a: RenderArgs) -> Result<(), Failure> {
+    use drape_render::{FrameSelect, Layout, RenderOptions};
+    let input = |e: drape_render::RenderError| Failure::Input(anyhow::Error::new(e));
+    let (width, height) = parse_size(
+        a.size.as_deref(),
+        if a.animate { (800, 600) } else { (1200, 900) },
+    )?;
+    let opts = RenderOptions {
+        layout: if a.animate {
+            Layout::Animation {
+                frame_delay_ms: a.delay_ms,
+            }
+        } else if a.grid {
+            Layout::Grid { panels: a.panels }
+        } else {
+            Layout::Single
+        },
+        frame: match (a.step, a.time) {
+            (Some(s), _) => FrameSelect::Step(s),
+            (_, Some(t)) => FrameSelect::Time(t),
+            _ => FrameSelect::Last,
+        },
+        view: a.view.parse().map_err(input)?,
+        field: a.field.parse().map_err(input)?,
+        width,
+        height,
+        output: a.output,
+        scenario: a.scenario,
+        obstacles: !a.no_obstacles,
+        range: a.range.map(|r| (r[0], r[1])),
+        ..Default::default()
+    };
+    let report = drape_render::render(&a.dir, &opts).map_err(input)?;
+    for n in &report.notices {
+        eprintln!("note: {n}");
+    }
+    if let Some(out) = report.output {
+        println!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+fn plot(dir: &Path, output: Option<PathBuf>, size: Option<&str>) -> Result<(), Failure> {
+    let (width, height) = parse_size(size, (1200, 900))?;
+    let out = output.unwrap_or_else(|| dir.join("plot.png"));
+    drape_render::plot(dir, &out, width, height)
+        .map_err(|e| Failure::Input(anyhow::Error::new(e)))?;
+    println!("wrote {}", out.display());
+    Ok(())
 }
 
 fn example(name: Option<&str>, write: Option<&Path>) -> Result<(), Failure> {

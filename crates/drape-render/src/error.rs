@@ -8,12 +8,13 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
     /// A file could not be read or written.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {error}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
-        /// The operating system's error.
-        source: std::io::Error,
+        /// The operating system's error (in the message, so not also a
+        /// `source`: chains would print it twice).
+        error: std::io::Error,
     },
     /// A file was read but its content is not what drape writes.
     #[error("{}: {message}", path.display())]
@@ -76,7 +77,7 @@ impl RenderError {
     pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         RenderError::Io {
             path: path.into(),
-            source,
+            error: source,
         }
     }
 
