@@ -30,6 +30,11 @@ impl Shared {
 /// Elements per parallel work item.
 const CHUNK: usize = 256;
 
+/// Principal stresses below this (Pa) count as zero in the reported
+/// wrinkling state (round-off of an unstressed fabric is ~1e-9 Pa; fabric
+/// stresses are 1e1 to 1e6 Pa).
+const UNSTRESSED: f64 = 1e-3;
+
 /// Meshes with fewer elements are assembled on one thread.
 const PARALLEL_ABOVE: usize = 4096;
 
@@ -61,7 +66,8 @@ pub struct ElementResults {
     pub principal: Vec<[f64; 2]>,
     /// Wrinkling state: 0 taut, 1 wrinkled, 2 slack — the material's at
     /// the mean strain, or (for a material that carries compression) the
-    /// classification of the stress' principal values.
+    /// classification of the stress' principal values; an element whose
+    /// principal stresses are both below 1 mPa is reported slack.
     pub state: Vec<i32>,
 }
 
@@ -240,11 +246,17 @@ impl Model {
                 let (s, strain) =
                     element_stress(self.material.as_ref(), self.section, &ye[..n], grad, weight);
                 let (s1, s2) = principal_values(s);
-                let state = match self.material.wrinkle_state(strain) {
-                    Some(state) => state as i32,
-                    None if s2 >= 0.0 => 0,
-                    None if s1 > 0.0 => 1,
-                    None => 2,
+                // An unstressed element (a fabric in free fall) is slack,
+                // whatever the round-off in its stress says.
+                let state = if s1.abs().max(s2.abs()) < UNSTRESSED {
+                    2
+                } else {
+                    match self.material.wrinkle_state(strain) {
+                        Some(state) => state as i32,
+                        None if s2 >= 0.0 => 0,
+                        None if s1 > 0.0 => 1,
+                        None => 2,
+                    }
                 };
                 (s, [s1, s2], state)
             })
