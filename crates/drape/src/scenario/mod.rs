@@ -360,7 +360,7 @@ pub struct SolverSpec {
     #[serde(default = "default_max_cutbacks")]
     pub max_cutbacks: usize,
     /// Linear solver: `"auto"` (default: `direct` up to 300,000 unknowns,
-    /// `iterative` above), `"direct"` (a fresh sparse factorisation every
+    /// `reuse` above), `"direct"` (a fresh sparse factorisation every
     /// solve), `"iterative"` (block-Jacobi GMRES, no factorisation) or
     /// `"reuse"` (GMRES preconditioned by an earlier factorisation).
     #[serde(default)]

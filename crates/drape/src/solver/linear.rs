@@ -52,7 +52,8 @@ pub struct LinearStats {
     pub krylov_iterations: usize,
 }
 
-/// Above this many unknowns `auto` uses block-Jacobi GMRES, not factorisations.
+/// Above this many unknowns `auto` reuses factorisations, and no solve
+/// falls back to sparse LU (whose fill would take tens of gigabytes).
 const AUTO_ITERATIVE_ABOVE: usize = 300_000;
 /// Krylov iterations a reused factor gets before the matrix is refactorised.
 const REUSE_ITERATIONS: usize = 8;
@@ -76,8 +77,9 @@ pub enum LinearMode {
     /// positive definite; GMRES preconditioned by the Cholesky factor of the
     /// symmetric part when not symmetric; LU otherwise.
     Direct,
-    /// `direct` up to 300,000 unknowns, `iterative` above (where a sparse
-    /// factorisation costs seconds and gigabytes).
+    /// `direct` up to 300,000 unknowns, `reuse` above (where a sparse
+    /// factorisation costs tens of seconds and gigabytes, and is worth
+    /// keeping across Newton iterations and steps).
     #[default]
     Auto,
     /// GMRES preconditioned by the Cholesky factor of an earlier Hessian,
@@ -100,7 +102,7 @@ fn invert3(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
     };
     let det = m[0][0] * c(0, 0) + m[0][1] * c(0, 1) + m[0][2] * c(0, 2);
     let scale = m.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
-    if !(det.abs() > 1e-14 * scale.powi(3)) {
+    if det.is_nan() || det.abs() <= 1e-14 * scale.powi(3) {
         return None;
     }
     let mut inv = [[0.0; 3]; 3];
@@ -256,7 +258,7 @@ impl LinearSolver {
             self.rhs[(i, 0)] = *v;
         }
         let mode = match self.mode {
-            LinearMode::Auto if n > AUTO_ITERATIVE_ABOVE => LinearMode::Iterative,
+            LinearMode::Auto if n > AUTO_ITERATIVE_ABOVE => LinearMode::Reuse,
             LinearMode::Auto => LinearMode::Direct,
             m => m,
         };
@@ -298,6 +300,13 @@ impl LinearSolver {
             // LU overwrote nothing we keep, but the Cholesky storage may hold
             // an indefinite attempt: do not reuse it.
             self.factor_kept = false;
+        }
+        if used.is_none() && n > AUTO_ITERATIVE_ABOVE {
+            return Err(LinearSolveError::Singular {
+                detail: format!(
+                    "no iterative or Cholesky solve converged, and sparse LU is not tried above {AUTO_ITERATIVE_ABOVE} unknowns"
+                ),
+            });
         }
         let used = match used {
             Some(u) => u,
