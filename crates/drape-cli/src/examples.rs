@@ -15,6 +15,10 @@ pub const ALL: &[(&str, &str)] = &[
         include_str!("../../../examples/drape-tester.toml"),
     ),
     (
+        "pedestal-fine",
+        include_str!("../../../examples/pedestal-fine.toml"),
+    ),
+    (
         "hanging-cloth",
         include_str!("../../../examples/hanging-cloth.toml"),
     ),
