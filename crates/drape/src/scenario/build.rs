@@ -155,6 +155,20 @@ impl Checker<'_> {
             .ok_or_else(|| self.invalid(table, index, key, format!("is required {why}")))
     }
 
+    /// Rejects every key of `given` that is present: they do not apply (`why`).
+    fn none_of(
+        &self,
+        table: &str,
+        index: Option<usize>,
+        given: &[(&str, bool)],
+        why: &str,
+    ) -> Result<(), ScenarioError> {
+        match given.iter().find(|(_, present)| *present) {
+            Some((key, _)) => Err(self.invalid(table, index, key, format!("does not apply {why}"))),
+            None => Ok(()),
+        }
+    }
+
     fn absent<T>(
         &self,
         table: &str,
@@ -743,20 +757,16 @@ fn build_mesh(c: &Checker, spec: &MeshSpec, base: &Path) -> Result<Mesh, Scenari
     c.finite(t, None, "center", &center)?;
     let mesh = match spec.shape {
         MeshShape::Rectangle => {
-            for (key, v) in [
-                ("radius", spec.radius.is_some()),
-                ("rings", spec.rings.is_some()),
-                ("path", spec.path.is_some()),
-            ] {
-                if v {
-                    return Err(c.invalid(
-                        t,
-                        None,
-                        key,
-                        "does not apply to shape = \"rectangle\"".into(),
-                    ));
-                }
-            }
+            c.none_of(
+                t,
+                None,
+                &[
+                    ("radius", spec.radius.is_some()),
+                    ("rings", spec.rings.is_some()),
+                    ("path", spec.path.is_some()),
+                ],
+                "to shape = \"rectangle\"",
+            )?;
             let size = c.required(
                 t,
                 None,
@@ -797,21 +807,17 @@ fn build_mesh(c: &Checker, spec: &MeshSpec, base: &Path) -> Result<Mesh, Scenari
             )
         }
         MeshShape::Disc => {
-            for (key, v) in [
-                ("size", spec.size.is_some()),
-                ("divisions", spec.divisions.is_some()),
-                ("pattern", spec.pattern.is_some()),
-                ("path", spec.path.is_some()),
-            ] {
-                if v {
-                    return Err(c.invalid(
-                        t,
-                        None,
-                        key,
-                        "does not apply to shape = \"disc\"".into(),
-                    ));
-                }
-            }
+            c.none_of(
+                t,
+                None,
+                &[
+                    ("size", spec.size.is_some()),
+                    ("divisions", spec.divisions.is_some()),
+                    ("pattern", spec.pattern.is_some()),
+                    ("path", spec.path.is_some()),
+                ],
+                "to shape = \"disc\"",
+            )?;
             let radius = c.positive(
                 t,
                 None,
@@ -836,23 +842,19 @@ fn build_mesh(c: &Checker, spec: &MeshSpec, base: &Path) -> Result<Mesh, Scenari
             generate::disc(radius, rings, center, order.unwrap_or(ElementOrder::Linear))
         }
         MeshShape::File => {
-            for (key, v) in [
-                ("size", spec.size.is_some()),
-                ("divisions", spec.divisions.is_some()),
-                ("pattern", spec.pattern.is_some()),
-                ("radius", spec.radius.is_some()),
-                ("rings", spec.rings.is_some()),
-                ("center", spec.center.is_some()),
-            ] {
-                if v {
-                    return Err(c.invalid(
-                        t,
-                        None,
-                        key,
-                        "does not apply to shape = \"file\"".into(),
-                    ));
-                }
-            }
+            c.none_of(
+                t,
+                None,
+                &[
+                    ("size", spec.size.is_some()),
+                    ("divisions", spec.divisions.is_some()),
+                    ("pattern", spec.pattern.is_some()),
+                    ("radius", spec.radius.is_some()),
+                    ("rings", spec.rings.is_some()),
+                    ("center", spec.center.is_some()),
+                ],
+                "to shape = \"file\"",
+            )?;
             let rel = c.required(t, None, "path", &spec.path, "for shape = \"file\"")?;
             let path: PathBuf = base.join(&rel);
             let mesh =
