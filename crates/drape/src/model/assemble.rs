@@ -38,12 +38,13 @@ const UNSTRESSED: f64 = 1e-3;
 /// Meshes with fewer elements are assembled on one thread.
 const PARALLEL_ABOVE: usize = 4096;
 
-/// Per-thread scratch for one element.
+/// Per-thread scratch for one element, on the stack (no allocation per
+/// assembly).
 struct Local {
     y: [[f64; 3]; MAX_NODES],
     f: [f64; 3 * MAX_NODES],
     fp: [f64; 3 * MAX_NODES],
-    k: Vec<f64>,
+    k: [f64; 9 * MAX_NODES * MAX_NODES],
 }
 
 impl Local {
@@ -52,7 +53,7 @@ impl Local {
             y: [[0.0; 3]; MAX_NODES],
             f: [0.0; 3 * MAX_NODES],
             fp: [0.0; 3 * MAX_NODES],
-            k: vec![0.0; 9 * MAX_NODES * MAX_NODES],
+            k: [0.0; 9 * MAX_NODES * MAX_NODES],
         }
     }
 }

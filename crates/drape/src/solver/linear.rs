@@ -164,6 +164,9 @@ struct Krylov {
     basis: Vec<Vec<f64>>,
     work: Mat<f64>,
     z: Vec<f64>,
+    x: Vec<f64>,
+    r: Vec<f64>,
+    ax: Vec<f64>,
 }
 
 impl Default for Krylov {
@@ -174,6 +177,9 @@ impl Default for Krylov {
             basis: Vec::new(),
             work: Mat::zeros(0, 0),
             z: Vec::new(),
+            x: Vec::new(),
+            r: Vec::new(),
+            ax: Vec::new(),
         }
     }
 }
@@ -357,8 +363,10 @@ impl LinearSolver {
     }
 
     /// `|A x - b|` with `x` in `self.rhs` and `b` in `rhs`.
-    fn residual_norm(&self, values: &[f64], b: &[f64]) -> f64 {
-        let mut r = b.to_vec();
+    fn residual_norm(&mut self, values: &[f64], b: &[f64]) -> f64 {
+        let mut r = std::mem::take(&mut self.krylov.r);
+        r.clear();
+        r.extend_from_slice(b);
         let col_ptr = self.symbolic.col_ptr();
         let row_idx = self.symbolic.row_idx();
         for c in 0..self.dimension() {
@@ -367,7 +375,9 @@ impl LinearSolver {
                 r[row_idx[k]] -= values[k] * x;
             }
         }
-        r.iter().map(|v| v * v).sum::<f64>().sqrt()
+        let norm = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+        self.krylov.r = r;
+        norm
     }
 
     /// Factorises `values` (lower triangle read) by Cholesky into the kept
@@ -542,8 +552,11 @@ impl LinearSolver {
         const RESTART: usize = 25;
         let n = self.dimension();
         let b_norm = b.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let mut x = vec![0.0; n];
+        let mut x = std::mem::take(&mut self.krylov.x);
+        x.clear();
+        x.resize(n, 0.0);
         if b_norm == 0.0 {
+            self.krylov.x = x;
             self.rhs.as_mut().fill(0.0);
             return Ok(true);
         }
@@ -553,8 +566,10 @@ impl LinearSolver {
         if work.nrows() != n {
             work = Mat::zeros(n, 1);
         }
-        let mut r = vec![0.0; n];
-        let mut ax = vec![0.0; n];
+        let mut r = std::mem::take(&mut self.krylov.r);
+        r.resize(n, 0.0);
+        let mut ax = std::mem::take(&mut self.krylov.ax);
+        ax.resize(n, 0.0);
         let mut iterations = 0;
         let mut converged = false;
         while iterations < max_iterations && !converged {
@@ -654,12 +669,16 @@ impl LinearSolver {
         }
         self.krylov.basis = basis;
         self.krylov.work = work;
+        self.krylov.r = r;
+        self.krylov.ax = ax;
         self.last_krylov_iterations = iterations;
         self.stats.krylov_iterations += iterations;
         for i in 0..n {
             self.rhs[(i, 0)] = x[i];
         }
-        Ok(converged && x.iter().all(|v| v.is_finite()))
+        let finite = x.iter().all(|v| v.is_finite());
+        self.krylov.x = x;
+        Ok(converged && finite)
     }
 
     fn solve_lu(&mut self, values: &[f64]) -> Result<(), LinearSolveError> {
