@@ -284,8 +284,17 @@ fn run(
     });
     if resume.is_none() {
         // Remember the scenario, for --resume and for readers of the outputs.
+        let copy = out.join("scenario.toml");
         std::fs::create_dir_all(&out)
-            .and_then(|()| std::fs::copy(path, out.join("scenario.toml")).map(|_| ()))
+            .and_then(|()| {
+                // Never copy a file onto itself (that would truncate it).
+                let same = std::fs::canonicalize(path).ok() == std::fs::canonicalize(&copy).ok();
+                if same {
+                    Ok(())
+                } else {
+                    std::fs::copy(path, &copy).map(|_| ())
+                }
+            })
             .and_then(|()| {
                 let abs = std::fs::canonicalize(path)?;
                 std::fs::write(out.join("scenario.path"), abs.to_string_lossy().as_bytes())
