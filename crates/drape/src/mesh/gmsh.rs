@@ -238,16 +238,24 @@ impl MeshReadError {
     }
 }
 
+impl MeshReadError {
+    /// Reads a whole mesh file, with its name as messages show it.
+    pub(crate) fn read(path: &Path) -> Result<(Vec<u8>, String), MeshReadError> {
+        let file = path.display().to_string();
+        let bytes = std::fs::read(path).map_err(|source| MeshReadError::Io {
+            file: file.clone(),
+            source,
+        })?;
+        Ok((bytes, file))
+    }
+}
+
 /// Reads a Gmsh MSH file (2.2 or 4.1, ASCII or binary) into a [`Mesh`].
 ///
 /// Error messages name the file as `path` displays. See the
 /// [module documentation](self) for what is read and how nodes are numbered.
 pub fn read_msh(path: &Path) -> Result<Mesh, MeshReadError> {
-    let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| MeshReadError::Io {
-        file: file.clone(),
-        source,
-    })?;
+    let (bytes, file) = MeshReadError::read(path)?;
     parse_msh(&bytes, &file)
 }
 

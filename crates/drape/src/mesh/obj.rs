@@ -54,11 +54,7 @@ pub use super::gmsh::{Location, MeshReadError};
 /// Error messages name the file as `path` displays. See the
 /// [module documentation](self) for what is read.
 pub fn read_obj(path: &Path) -> Result<Mesh, MeshReadError> {
-    let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| MeshReadError::Io {
-        file: file.clone(),
-        source,
-    })?;
+    let (bytes, file) = MeshReadError::read(path)?;
     parse_obj(&bytes, &file)
 }
 

@@ -40,11 +40,7 @@ use crate::mesh::{ElementOrder, Mesh};
 /// three nodes per triangle. Error messages name the file as `path`
 /// displays.
 pub fn read_stl(path: &Path) -> Result<Mesh, MeshReadError> {
-    let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| MeshReadError::Io {
-        file: file.clone(),
-        source,
-    })?;
+    let (bytes, file) = MeshReadError::read(path)?;
     parse_stl(&bytes, &file)
 }
 
