@@ -31,6 +31,10 @@ pub use obstacle::{Obstacle, ObstacleError, Proximity};
 use crate::vec3::{add, scale, sub};
 use rayon::prelude::*;
 
+/// Meshes with fewer nodes search for contact on the calling thread (a
+/// thread hand-off costs more than a search of a few thousand nodes).
+const PARALLEL_NODES_ABOVE: usize = 4096;
+
 /// An obstacle and its prescribed rigid motion.
 #[derive(Debug)]
 pub struct RigidBody {
@@ -153,20 +157,21 @@ impl ContactModel {
             return;
         }
         let margins: Vec<f64> = self.bodies.iter().map(RigidBody::margin).collect();
-        state
-            .hints
-            .par_chunks_mut(nb)
-            .enumerate()
-            .for_each(|(p, hints)| {
-                let yp = [y[3 * p], y[3 * p + 1], y[3 * p + 2]];
-                for (k, body) in self.bodies.iter().enumerate() {
-                    if body.far(yp, t, margins[k]) {
-                        continue;
-                    }
-                    let h = (hints[k] != u32::MAX).then_some(hints[k]);
-                    hints[k] = body.proximity(yp, t, h).feature;
+        let refresh = |(p, hints): (usize, &mut [u32])| {
+            let yp = [y[3 * p], y[3 * p + 1], y[3 * p + 2]];
+            for (k, body) in self.bodies.iter().enumerate() {
+                if body.far(yp, t, margins[k]) {
+                    continue;
                 }
-            });
+                let h = (hints[k] != u32::MAX).then_some(hints[k]);
+                hints[k] = body.proximity(yp, t, h).feature;
+            }
+        };
+        if y.len() / 3 >= PARALLEL_NODES_ABOVE {
+            state.hints.par_chunks_mut(nb).enumerate().for_each(refresh);
+        } else {
+            state.hints.chunks_mut(nb).enumerate().for_each(refresh);
+        }
     }
 
     /// Every node–body pair with a gap below `threshold` at `y`, time `t`,
@@ -185,34 +190,36 @@ impl ContactModel {
     ) -> (Vec<(usize, usize, Proximity)>, f64) {
         let nodes = y.len() / 3;
         let margins: Vec<f64> = self.bodies.iter().map(RigidBody::margin).collect();
-        let (pairs, min_gap) = (0..nodes)
-            .into_par_iter()
-            .fold(
-                || (Vec::new(), f64::INFINITY),
-                |(mut acc, mut min), p| {
-                    let yp = [y[3 * p], y[3 * p + 1], y[3 * p + 2]];
-                    for (k, body) in self.bodies.iter().enumerate() {
-                        if !exact_min_gap && body.far(yp, t, margins[k]) {
-                            // Far outside: the gap is at least the margin.
-                            min = min.min(margins[k]);
-                            continue;
-                        }
-                        let prox = body.proximity(yp, t, self.hint(state, p, k));
-                        min = min.min(prox.gap);
-                        if prox.gap < threshold {
-                            acc.push((p, k, prox));
-                        }
-                    }
-                    (acc, min)
-                },
-            )
-            .reduce(
-                || (Vec::new(), f64::INFINITY),
-                |(mut a, ma), (b, mb)| {
-                    a.extend(b);
-                    (a, ma.min(mb))
-                },
-            );
+        let visit = |(mut acc, mut min): (Vec<(usize, usize, Proximity)>, f64), p: usize| {
+            let yp = [y[3 * p], y[3 * p + 1], y[3 * p + 2]];
+            for (k, body) in self.bodies.iter().enumerate() {
+                if !exact_min_gap && body.far(yp, t, margins[k]) {
+                    // Far outside: the gap is at least the margin.
+                    min = min.min(margins[k]);
+                    continue;
+                }
+                let prox = body.proximity(yp, t, self.hint(state, p, k));
+                min = min.min(prox.gap);
+                if prox.gap < threshold {
+                    acc.push((p, k, prox));
+                }
+            }
+            (acc, min)
+        };
+        let (pairs, min_gap) = if nodes >= PARALLEL_NODES_ABOVE {
+            (0..nodes)
+                .into_par_iter()
+                .fold(|| (Vec::new(), f64::INFINITY), visit)
+                .reduce(
+                    || (Vec::new(), f64::INFINITY),
+                    |(mut a, ma), (b, mb)| {
+                        a.extend(b);
+                        (a, ma.min(mb))
+                    },
+                )
+        } else {
+            (0..nodes).fold((Vec::new(), f64::INFINITY), visit)
+        };
         // A fixed order, whatever the threads did: sums over pairs are
         // then reproducible to the bit.
         let mut pairs = pairs;

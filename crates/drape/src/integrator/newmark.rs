@@ -51,9 +51,11 @@ impl DynamicWorkspace {
         mode: crate::solver::LinearMode,
     ) -> Result<Self, crate::solver::LinearSolveError> {
         let n = model.dofs();
+        let (node_ptr, node_rows) = model.pattern.node_graph();
         let linear =
             crate::solver::LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx)?
                 .with_transpose(model.pattern.transpose_map().to_vec())
+                .with_node_blocks(node_ptr, node_rows)
                 .with_mode(mode);
         Ok(Self {
             q: vec![0.0; n],

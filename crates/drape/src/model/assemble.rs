@@ -35,9 +35,6 @@ const CHUNK: usize = 256;
 /// stresses are 1e1 to 1e6 Pa).
 const UNSTRESSED: f64 = 1e-3;
 
-/// Meshes with fewer elements are assembled on one thread.
-const PARALLEL_ABOVE: usize = 4096;
-
 /// Per-thread scratch for one element, on the stack (no allocation per
 /// assembly).
 struct Local {
@@ -192,7 +189,7 @@ impl Model {
             };
             // Small meshes: threads cost more than they save (a colour of
             // a 20x20 fabric is ~120 elements, ~25 us of work).
-            energy += if self.mesh.element_count() < PARALLEL_ABOVE {
+            energy += if !self.parallel() {
                 let mut local = Local::new();
                 colour
                     .chunks(CHUNK)
@@ -214,54 +211,63 @@ impl Model {
     pub fn strain_energy(&self, y: &[f64]) -> f64 {
         let n = self.mesh.order.nodes_per_element();
         let count = self.mesh.element_count();
-        (0..count.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|c| {
-                (c * CHUNK..((c + 1) * CHUNK).min(count))
-                    .map(|e| {
-                        let ye = self.element_positions(e, y);
-                        let (grad, weight) = self.geometry.element(e);
-                        crate::element::membrane::element_energy(
-                            self.material.as_ref(),
-                            self.section,
-                            &ye[..n],
-                            grad,
-                            weight,
-                        )
-                    })
-                    .sum::<f64>()
-            })
-            .collect::<Vec<f64>>()
-            .iter()
-            .sum()
+        let chunk = |c: usize| {
+            (c * CHUNK..((c + 1) * CHUNK).min(count))
+                .map(|e| {
+                    let ye = self.element_positions(e, y);
+                    let (grad, weight) = self.geometry.element(e);
+                    crate::element::membrane::element_energy(
+                        self.material.as_ref(),
+                        self.section,
+                        &ye[..n],
+                        grad,
+                        weight,
+                    )
+                })
+                .sum::<f64>()
+        };
+        let chunks = 0..count.div_ceil(CHUNK);
+        if self.parallel() {
+            chunks
+                .into_par_iter()
+                .map(chunk)
+                .collect::<Vec<f64>>()
+                .iter()
+                .sum()
+        } else {
+            chunks.map(chunk).sum()
+        }
     }
 
     /// Mean stress and principal stresses of every element at positions `y`.
     pub fn element_results(&self, y: &[f64]) -> ElementResults {
         let n = self.mesh.order.nodes_per_element();
-        let per_element: Vec<([f64; 3], [f64; 2], i32)> = (0..self.mesh.element_count())
-            .into_par_iter()
-            .map(|e| {
-                let ye = self.element_positions(e, y);
-                let (grad, weight) = self.geometry.element(e);
-                let (s, strain) =
-                    element_stress(self.material.as_ref(), self.section, &ye[..n], grad, weight);
-                let (s1, s2) = principal_values(s);
-                // An unstressed element (a fabric in free fall) is slack,
-                // whatever the round-off in its stress says.
-                let state = if s1.abs().max(s2.abs()) < UNSTRESSED {
-                    2
-                } else {
-                    match self.material.wrinkle_state(strain) {
-                        Some(state) => state as i32,
-                        None if s2 >= 0.0 => 0,
-                        None if s1 > 0.0 => 1,
-                        None => 2,
-                    }
-                };
-                (s, [s1, s2], state)
-            })
-            .collect();
+        let result = |e: usize| {
+            let ye = self.element_positions(e, y);
+            let (grad, weight) = self.geometry.element(e);
+            let (s, strain) =
+                element_stress(self.material.as_ref(), self.section, &ye[..n], grad, weight);
+            let (s1, s2) = principal_values(s);
+            // An unstressed element (a fabric in free fall) is slack,
+            // whatever the round-off in its stress says.
+            let state = if s1.abs().max(s2.abs()) < UNSTRESSED {
+                2
+            } else {
+                match self.material.wrinkle_state(strain) {
+                    Some(state) => state as i32,
+                    None if s2 >= 0.0 => 0,
+                    None if s1 > 0.0 => 1,
+                    None => 2,
+                }
+            };
+            (s, [s1, s2], state)
+        };
+        let elements = 0..self.mesh.element_count();
+        let per_element: Vec<([f64; 3], [f64; 2], i32)> = if self.parallel() {
+            elements.into_par_iter().map(result).collect()
+        } else {
+            elements.map(result).collect()
+        };
         ElementResults {
             stress: per_element.iter().map(|r| r.0).collect(),
             principal: per_element.iter().map(|r| r.1).collect(),
@@ -275,24 +281,31 @@ impl Model {
     /// smallest eigenvalue of `C = F^T F`, and the element where it occurs.
     pub fn min_stretch(&self, y: &[f64]) -> (f64, usize) {
         let n = self.mesh.order.nodes_per_element();
-        (0..self.mesh.element_count())
-            .into_par_iter()
-            .map(|e| {
-                let ye = self.element_positions(e, y);
-                let (grad, weight) = self.geometry.element(e);
-                let mut least = f64::INFINITY;
-                for q in 0..weight.len() {
-                    let f = crate::element::membrane::deformation_gradient(
-                        &ye[..n],
-                        &grad[q * n..(q + 1) * n],
-                    );
-                    let e2 = crate::element::membrane::green_lagrange(&f);
-                    // C = I + 2E; its smallest eigenvalue from E's.
-                    let (_, e_min) = principal_values([e2[0], e2[1], 0.5 * e2[2]]);
-                    least = least.min((1.0 + 2.0 * e_min).max(0.0).sqrt());
-                }
-                (least, e)
-            })
-            .reduce(|| (f64::INFINITY, 0), |a, b| if b.0 < a.0 { b } else { a })
+        let least_of = |e: usize| {
+            let ye = self.element_positions(e, y);
+            let (grad, weight) = self.geometry.element(e);
+            let mut least = f64::INFINITY;
+            for q in 0..weight.len() {
+                let f = crate::element::membrane::deformation_gradient(
+                    &ye[..n],
+                    &grad[q * n..(q + 1) * n],
+                );
+                let e2 = crate::element::membrane::green_lagrange(&f);
+                // C = I + 2E; its smallest eigenvalue from E's.
+                let (_, e_min) = principal_values([e2[0], e2[1], 0.5 * e2[2]]);
+                least = least.min((1.0 + 2.0 * e_min).max(0.0).sqrt());
+            }
+            (least, e)
+        };
+        let smaller = |a: (f64, usize), b: (f64, usize)| if b.0 < a.0 { b } else { a };
+        let elements = 0..self.mesh.element_count();
+        if self.parallel() {
+            elements
+                .into_par_iter()
+                .map(least_of)
+                .reduce(|| (f64::INFINITY, 0), smaller)
+        } else {
+            elements.map(least_of).fold((f64::INFINITY, 0), smaller)
+        }
     }
 }

@@ -75,6 +75,10 @@ pub enum ModelError {
     },
 }
 
+/// Meshes with fewer elements run their loops on one thread
+/// ([`Model::parallel`]).
+pub const PARALLEL_ABOVE: usize = 4096;
+
 impl Model {
     /// Builds the model; the mesh is validated first.
     #[allow(clippy::too_many_arguments)]
@@ -115,6 +119,16 @@ impl Model {
             pressure_quadrature,
             contact: None,
         })
+    }
+
+    /// Whether loops over elements and nodes are worth spreading over
+    /// threads. Below [`PARALLEL_ABOVE`] elements they run on the calling
+    /// thread: waking rayon's workers for a colour of ~120 elements or a
+    /// loop over ~400 nodes costs more than the loop (on the 20x20
+    /// pedestal the hand-offs took a third of the CPU time). Results do
+    /// not depend on it: parallel sums use fixed chunks summed in order.
+    pub fn parallel(&self) -> bool {
+        self.mesh.element_count() >= PARALLEL_ABOVE
     }
 
     /// Number of degrees of freedom (3 per node, fixed ones included).
@@ -199,7 +213,7 @@ impl Model {
     pub fn mass_times(&self, v: &[f64], out: &mut [f64]) {
         let (ptr, rows) = self.pattern.node_graph();
         use rayon::prelude::*;
-        out.par_chunks_mut(3).enumerate().for_each(|(b, o)| {
+        let row = |(b, o): (usize, &mut [f64])| {
             // M is symmetric: row b of M v = column b of M dotted with v.
             let mut s = [0.0; 3];
             for p in ptr[b]..ptr[b + 1] {
@@ -210,7 +224,12 @@ impl Model {
                 s[2] += m * v[3 * a + 2];
             }
             o.copy_from_slice(&s);
-        });
+        };
+        if self.parallel() {
+            out.par_chunks_mut(3).enumerate().for_each(row);
+        } else {
+            out.chunks_mut(3).enumerate().for_each(row);
+        }
     }
 
     /// Kinetic energy `1/2 V . M V` (J). `scratch`: `dofs` long.

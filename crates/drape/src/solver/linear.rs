@@ -14,6 +14,7 @@
 //! Each symbolic analysis is made once, on first use, and kept; numeric
 //! factors are written into storage that is reused from call to call.
 
+use super::block_lu::BlockLu;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::SupernodalThreshold;
@@ -28,6 +29,9 @@ use faer::{Conj, Mat, Par, Side};
 /// Which factorisation solved a system.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Factorization {
+    /// Sparse LU in 3x3 node blocks without pivoting between nodes
+    /// ([`super::block_lu`]), symmetric (`L D L^T`) or not.
+    BlockLu,
     /// Sparse Cholesky `L L^T`.
     Cholesky,
     /// Sparse LU with partial pivoting.
@@ -52,11 +56,17 @@ pub struct LinearStats {
     pub lu_factorizations: usize,
     /// Krylov (GMRES) iterations.
     pub krylov_iterations: usize,
+    /// Numeric block LU factorisations (3x3 node blocks).
+    pub block_lu_factorizations: usize,
 }
 
 /// Above this many unknowns `auto` reuses factorisations, and no solve
 /// falls back to sparse LU (whose fill would take tens of gigabytes).
 const AUTO_ITERATIVE_ABOVE: usize = 300_000;
+/// Largest system (unknowns) that `direct` and `auto` factorise by the
+/// node-block LU: above it faer's supernodal Cholesky, whose dense kernels
+/// pay off on large fronts, is faster (docs/performance.md).
+const BLOCK_LU_MAX: usize = 40_000;
 /// Krylov iterations a reused factor gets before the matrix is refactorised.
 const REUSE_ITERATIONS: usize = 8;
 /// Most block-Jacobi GMRES iterations before LU takes over.
@@ -156,6 +166,10 @@ pub struct LinearSolver {
     mode: LinearMode,
     /// Whether the Cholesky storage holds a usable factor (reusable).
     factor_kept: bool,
+    /// The node graph, when the pattern is made of 3x3 node blocks, and
+    /// its block LU (analysed on first use).
+    node_graph: Option<(Vec<usize>, Vec<usize>)>,
+    block_lu: Option<BlockLu>,
 }
 
 struct Krylov {
@@ -217,6 +231,8 @@ impl LinearSolver {
             last_krylov_iterations: 0,
             mode: LinearMode::Direct,
             factor_kept: false,
+            node_graph: None,
+            block_lu: None,
             stats: LinearStats::default(),
             krylov_tolerance: 1e-12,
         })
@@ -234,6 +250,78 @@ impl LinearSolver {
     pub fn with_transpose(mut self, transpose: Vec<usize>) -> Self {
         self.transpose = Some(transpose);
         self
+    }
+
+    /// Enables the node-block LU ([`super::block_lu`]) for a pattern of 3x3
+    /// node blocks in [`super::SparsePattern`]'s layout with node graph
+    /// `(node_ptr, node_rows)`.
+    pub fn with_node_blocks(mut self, node_ptr: &[usize], node_rows: &[usize]) -> Self {
+        self.node_graph = Some((node_ptr.to_vec(), node_rows.to_vec()));
+        self
+    }
+
+    /// Factorises by the node-block LU and solves for `b`, leaving the
+    /// solution in `self.rhs`, refined once by the residual. `Ok(false)`
+    /// when the block LU does not apply, meets a bad pivot, or leaves a
+    /// residual above `1e-10 |b|` (the caller then pivots).
+    fn block_lu_solve(
+        &mut self,
+        values: &[f64],
+        symmetric: bool,
+        b: &[f64],
+    ) -> Result<bool, LinearSolveError> {
+        if self.block_lu.is_none() {
+            let Some((ptr, rows)) = &self.node_graph else {
+                return Ok(false);
+            };
+            self.block_lu = Some(
+                BlockLu::new(ptr, rows)
+                    .map_err(|e| LinearSolveError::Factorization(e.to_string()))?,
+            );
+        }
+        let mut lu = self.block_lu.take().expect("set above");
+        self.stats.block_lu_factorizations += 1;
+        if lu.factorize(values, symmetric).is_err() {
+            self.block_lu = Some(lu);
+            return Ok(false);
+        }
+        let mut x = std::mem::take(&mut self.krylov.x);
+        x.clear();
+        x.extend_from_slice(b);
+        lu.solve_in_place(&mut x);
+        let mut ax = std::mem::take(&mut self.krylov.ax);
+        ax.resize(b.len(), 0.0);
+        self.matvec(values, &x, &mut ax);
+        let b_norm = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let mut d = std::mem::take(&mut self.krylov.r);
+        d.clear();
+        d.extend(b.iter().zip(&ax).map(|(p, q)| p - q));
+        let r_norm = d.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let mut ok = r_norm.is_finite();
+        if ok && r_norm > 1e-14 * b_norm {
+            // One step of iterative refinement: cheap (a solve with the
+            // factor) and it removes what the unpivoted elimination lost.
+            lu.solve_in_place(&mut d);
+            for (xi, di) in x.iter_mut().zip(&d) {
+                *xi += di;
+            }
+            self.matvec(values, &x, &mut ax);
+            let r2 = b
+                .iter()
+                .zip(&ax)
+                .map(|(p, q)| (p - q) * (p - q))
+                .sum::<f64>()
+                .sqrt();
+            ok = r2 <= 1e-10 * b_norm;
+        }
+        for (i, v) in x.iter().enumerate() {
+            self.rhs[(i, 0)] = *v;
+        }
+        self.krylov.x = x;
+        self.krylov.ax = ax;
+        self.krylov.r = d;
+        self.block_lu = Some(lu);
+        Ok(ok)
     }
 
     /// Entries of the Cholesky factor `L`, once it has been analysed.
@@ -275,6 +363,12 @@ impl LinearSolver {
             m => m,
         };
         let mut used = None;
+        if mode == LinearMode::Direct
+            && n <= BLOCK_LU_MAX
+            && self.block_lu_solve(values, symmetric, rhs)?
+        {
+            used = Some(Factorization::BlockLu);
+        }
         // Reuse the kept factor (of an earlier Hessian) as a preconditioner
         // while it pays: a few Krylov iterations instead of a factorisation.
         if mode == LinearMode::Reuse
@@ -343,12 +437,16 @@ impl LinearSolver {
             });
         }
         // (Krylov solves have checked their own residual, to their tolerance.)
-        let direct = matches!(used, Factorization::Cholesky | Factorization::Lu);
+        let direct = matches!(
+            used,
+            Factorization::Cholesky | Factorization::Lu | Factorization::BlockLu
+        );
         if residual.is_nan() || (direct && residual > 1e-6 * b_norm) {
             return Err(LinearSolveError::Singular {
                 detail: format!(
                     "the {} solve leaves a relative residual of {:.1e}",
                     match used {
+                        Factorization::BlockLu => "block LU",
                         Factorization::Cholesky => "Cholesky",
                         Factorization::Lu => "LU",
                         Factorization::PreconditionedGmres => "preconditioned GMRES",
