@@ -956,6 +956,11 @@ const BAD_INPUTS: &[BadInput] = &[
         line: Some(19),
     },
     BadInput {
+        file: "chord_steps_large.toml",
+        fragments: &["`solver.chord_steps`", "at most 10", "11"],
+        line: Some(19),
+    },
+    BadInput {
         file: "output_every_zero.toml",
         fragments: &["`output.every`", "at least 1"],
         line: Some(19),

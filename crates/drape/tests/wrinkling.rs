@@ -141,6 +141,16 @@ fn run(
     wrinkling: &str,
     extra_monitors: bool,
 ) -> (Vec<String>, Vec<Vec<f64>>, drape::simulation::Summary) {
+    run_with(example, wrinkling, extra_monitors, None)
+}
+
+/// [`run`], optionally with `[solver] chord_steps` set.
+fn run_with(
+    example: &str,
+    wrinkling: &str,
+    extra_monitors: bool,
+    chord_steps: Option<usize>,
+) -> (Vec<String>, Vec<Vec<f64>>, drape::simulation::Summary) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../examples")
         .join(example);
@@ -150,6 +160,8 @@ fn run(
         .map(|l| {
             if l.starts_with("wrinkling") {
                 format!("wrinkling = \"{wrinkling}\"")
+            } else if let (Some(c), true) = (chord_steps, l.starts_with("max_iterations")) {
+                format!("{l}\nchord_steps = {c}")
             } else {
                 l.to_string()
             }
@@ -218,7 +230,9 @@ fn pedestal_with_stress_projection_drapes_and_both_methods_agree() {
 /// Newton's effort with and without wrinkling: the mean and largest
 /// iterations per step of the pedestal (penalty and multipliers) with
 /// `none`, `stress-projection` and `relaxed-energy`; stress projection must
-/// not need more than 1.5 times the iterations without wrinkling.
+/// not need more than 1.5 times the iterations without wrinkling. Plain
+/// Newton (no chord steps): this measures how the wrinkling tangent serves
+/// Newton, not how often a factorisation can be reused.
 #[test]
 fn newton_effort_with_wrinkling_is_at_most_one_and_a_half_times() {
     for example in [
@@ -227,7 +241,7 @@ fn newton_effort_with_wrinkling_is_at_most_one_and_a_half_times() {
     ] {
         let mut totals = Vec::new();
         for model in ["none", "stress-projection", "relaxed-energy"] {
-            let (h, rows, summary) = run(example, model, false);
+            let (h, rows, summary) = run_with(example, model, false, Some(0));
             let its = column(&h, &rows, "iterations");
             let steps = its.len() - 1;
             let max = its.iter().copied().fold(0.0, f64::max);

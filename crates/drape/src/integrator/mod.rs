@@ -204,6 +204,7 @@ pub(crate) fn solve_step(
             None => report,
             Some(mut t) => {
                 t.iterations += report.iterations;
+                t.chord_steps += report.chord_steps;
                 t.residuals.extend(report.residuals);
                 t.increments.extend(report.increments);
                 t.factorization = report.factorization.or(t.factorization);
@@ -230,6 +231,7 @@ pub(crate) fn solve_step(
 fn empty_report() -> NewtonReport {
     NewtonReport {
         iterations: 0,
+        chord_steps: 0,
         residuals: Vec::new(),
         increments: Vec::new(),
         factorization: None,

@@ -385,6 +385,14 @@ impl Scenario {
                 format!("must be at most 30, not {}", s.max_cutbacks),
             ));
         }
+        if s.chord_steps > 10 {
+            return Err(c.invalid(
+                "solver",
+                None,
+                "chord_steps",
+                format!("must be at most 10, not {}", s.chord_steps),
+            ));
+        }
         if self.output.every == 0 {
             return Err(c.invalid("output", None, "every", "must be at least 1".into()));
         }
@@ -474,6 +482,7 @@ impl Scenario {
                 tolerance: s.tolerance,
                 residual_tolerance: s.residual_tolerance,
                 max_iterations: s.max_iterations,
+                chord_steps: s.chord_steps,
             },
             max_cutbacks: s.max_cutbacks,
             output_every: self.output.every,

@@ -365,6 +365,11 @@ pub struct SolverSpec {
     /// `"reuse"` (GMRES preconditioned by an earlier factorisation).
     #[serde(default)]
     pub linear: crate::solver::LinearMode,
+    /// Most chord steps after each Newton step, 0–10 (0: plain Newton):
+    /// solves with the factorisation just made, kept while each shrinks the
+    /// increment at least fourfold. Default 2.
+    #[serde(default = "default_chord_steps")]
+    pub chord_steps: usize,
 }
 
 impl Default for SolverSpec {
@@ -375,6 +380,7 @@ impl Default for SolverSpec {
             max_iterations: default_max_iterations(),
             max_cutbacks: default_max_cutbacks(),
             linear: crate::solver::LinearMode::default(),
+            chord_steps: default_chord_steps(),
         }
     }
 }
@@ -390,6 +396,9 @@ fn default_max_iterations() -> usize {
 }
 fn default_max_cutbacks() -> usize {
     6
+}
+fn default_chord_steps() -> usize {
+    2
 }
 
 /// `[output]`.

@@ -1,6 +1,12 @@
 //! Sparse direct solution of `H dY = -G` with faer, reusing the symbolic
 //! analysis for as long as the sparsity pattern holds.
 //!
+//! * Small systems (up to 5,000 unknowns when symmetric, 15,000 when not)
+//!   are factorised by the node-block LU of [`super::block_lu`], symmetric
+//!   (`L D L^T`) or not — one factorisation and one solve for the
+//!   non-symmetric wrinkling tangent, no Krylov iterations. A bad pivot
+//!   block or a residual it cannot refine below `1e-10 |b|` hands the
+//!   system to the paths below.
 //! * Symmetric Hessians (Saint-Venant–Kirchhoff with dead loads, mass and
 //!   supports; a follower pressure on a membrane whose edge is fixed, once
 //!   the element contributions have cancelled) are factorised by sparse
@@ -58,15 +64,23 @@ pub struct LinearStats {
     pub krylov_iterations: usize,
     /// Numeric block LU factorisations (3x3 node blocks).
     pub block_lu_factorizations: usize,
+    /// Solves with the factor of an earlier matrix (Newton's chord steps).
+    pub chord_solves: usize,
 }
 
 /// Above this many unknowns `auto` reuses factorisations, and no solve
 /// falls back to sparse LU (whose fill would take tens of gigabytes).
 const AUTO_ITERATIVE_ABOVE: usize = 300_000;
-/// Largest system (unknowns) that `direct` and `auto` factorise by the
-/// node-block LU: above it faer's supernodal Cholesky, whose dense kernels
-/// pay off on large fronts, is faster (docs/performance.md).
-const BLOCK_LU_MAX: usize = 40_000;
+/// Largest symmetric system (unknowns) that `direct` and `auto` factorise
+/// by the node-block LU: above it faer's supernodal Cholesky, whose dense
+/// kernels pay off on large fronts, is faster (measured: equal at 7,800
+/// unknowns, twice as fast at 30,600; docs/performance.md).
+const BLOCK_LU_MAX_SYMMETRIC: usize = 5_000;
+/// Largest non-symmetric system for the node-block LU: above it a
+/// Cholesky factorisation of the symmetric part and ~10 preconditioned
+/// GMRES iterations cost less than the general block LU (twice the
+/// symmetric one's work).
+const BLOCK_LU_MAX_GENERAL: usize = 15_000;
 /// Krylov iterations a reused factor gets before the matrix is refactorised.
 const REUSE_ITERATIONS: usize = 8;
 /// Most block-Jacobi GMRES iterations before LU takes over.
@@ -85,9 +99,10 @@ enum Preconditioner {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum LinearMode {
-    /// A fresh factorisation for every solve: Cholesky when symmetric
-    /// positive definite; GMRES preconditioned by the Cholesky factor of the
-    /// symmetric part when not symmetric; LU otherwise.
+    /// A fresh factorisation for every solve: the node-block LU for small
+    /// systems; else Cholesky when symmetric positive definite, GMRES
+    /// preconditioned by the Cholesky factor of the symmetric part when not
+    /// symmetric; LU otherwise.
     Direct,
     /// `direct` up to 300,000 unknowns, `reuse` above (where a sparse
     /// factorisation costs tens of seconds and gigabytes, and is worth
@@ -170,6 +185,8 @@ pub struct LinearSolver {
     /// its block LU (analysed on first use).
     node_graph: Option<(Vec<usize>, Vec<usize>)>,
     block_lu: Option<BlockLu>,
+    /// How the last system was solved, if it succeeded.
+    last_used: Option<Factorization>,
 }
 
 struct Krylov {
@@ -233,6 +250,7 @@ impl LinearSolver {
             factor_kept: false,
             node_graph: None,
             block_lu: None,
+            last_used: None,
             stats: LinearStats::default(),
             krylov_tolerance: 1e-12,
         })
@@ -353,6 +371,7 @@ impl LinearSolver {
     ) -> Result<Factorization, LinearSolveError> {
         let n = self.dimension();
         self.last_krylov_iterations = 0;
+        self.last_used = None;
         self.stats.solves += 1;
         for (i, v) in rhs.iter().enumerate() {
             self.rhs[(i, 0)] = *v;
@@ -363,8 +382,16 @@ impl LinearSolver {
             m => m,
         };
         let mut used = None;
+        // (A block LU of an earlier Hessian as GMRES preconditioner does
+        // not pay on the pedestal: the wrinkling tangent changes too much
+        // from one iteration to the next; docs/performance.md.)
+        let block_lu_max = if symmetric {
+            BLOCK_LU_MAX_SYMMETRIC
+        } else {
+            BLOCK_LU_MAX_GENERAL
+        };
         if mode == LinearMode::Direct
-            && n <= BLOCK_LU_MAX
+            && n <= block_lu_max
             && self.block_lu_solve(values, symmetric, rhs)?
         {
             used = Some(Factorization::BlockLu);
@@ -457,7 +484,37 @@ impl LinearSolver {
                 ),
             });
         }
+        self.last_used = Some(used);
         Ok(used)
+    }
+
+    /// Solves `A_old x = b` in place with the factorisation of the last
+    /// successful [`LinearSolver::solve`] (a chord step of Newton's
+    /// method: the matrix of an earlier iterate, no new factorisation).
+    /// `false`, with `rhs` unchanged, when the last solve left no factor
+    /// that can be reused this way (Krylov and LU paths).
+    pub fn solve_again(&mut self, rhs: &mut [f64]) -> bool {
+        match self.last_used {
+            Some(Factorization::BlockLu) => {
+                let Some(lu) = self.block_lu.as_mut() else {
+                    return false;
+                };
+                lu.solve_in_place(rhs);
+            }
+            Some(Factorization::Cholesky) => {
+                for (i, v) in rhs.iter().enumerate() {
+                    self.rhs[(i, 0)] = *v;
+                }
+                self.cholesky_solve_rhs();
+                for (i, x) in rhs.iter_mut().enumerate() {
+                    *x = self.rhs[(i, 0)];
+                }
+            }
+            _ => return false,
+        }
+        self.stats.solves += 1;
+        self.stats.chord_solves += 1;
+        true
     }
 
     /// `|A x - b|` with `x` in `self.rhs` and `b` in `rhs`.
@@ -615,6 +672,7 @@ impl LinearSolver {
     fn precondition(&mut self, kind: Preconditioner, x: &mut Mat<f64>) {
         match kind {
             Preconditioner::Cholesky => self.cholesky_solve(x),
+
             Preconditioner::BlockJacobi => {
                 let n = self.dimension();
                 for (i, m) in self.krylov.blocks.iter().enumerate() {
