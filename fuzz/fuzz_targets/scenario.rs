@@ -44,7 +44,9 @@ fn generated_nodes(s: &Scenario) -> usize {
                 .saturating_mul(ny.saturating_mul(p).saturating_add(1))
         }),
         MeshShape::Disc => s.mesh.rings.map_or(0, |r| {
-            r.saturating_mul(r).saturating_mul(3 * p * p).saturating_add(1)
+            r.saturating_mul(r)
+                .saturating_mul(3 * p * p)
+                .saturating_add(1)
         }),
         MeshShape::File => 0,
     }

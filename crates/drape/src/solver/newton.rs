@@ -307,7 +307,7 @@ fn chord_steps(
         }
         system.transform_increment(&mut ws.dy);
         let step = norm(&ws.dy) / length;
-        if !(step <= 0.25 * *increment) {
+        if step.is_nan() || step > 0.25 * *increment {
             return;
         }
         ws.y_old.copy_from_slice(y);
