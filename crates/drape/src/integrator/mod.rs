@@ -132,7 +132,7 @@ impl NewtonSystem for StepSystem<'_> {
             self.active = active;
         }
         let symmetric = model.symmetric_by_construction()
-            || h.is_some_and(|h| model.pattern.asymmetry(h) < 1e-10);
+            || h.is_some_and(|h| model.pattern.is_symmetric(h, 1e-10));
         Evaluation {
             scale,
             symmetric,

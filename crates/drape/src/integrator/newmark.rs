@@ -101,7 +101,7 @@ impl Newmark {
         let mut m = vec![0.0; model.pattern.nnz()];
         model.add_mass_to_hessian(1.0, &mut m);
         model.apply_supports(&mut rhs, Some(&mut m));
-        ws.newton.linear.solve(&m, true, &mut rhs)?;
+        ws.newton.linear.solve_mass(&m, &mut rhs)?;
         let mut state = State::at_rest(model, x);
         state.accelerations = rhs;
         Ok(state)

@@ -90,9 +90,21 @@ pub struct Wrinkling {
 /// the symmetric tensor `[[a, c], [c, b]]`.
 fn eigen(a: f64, b: f64, c: f64) -> (f64, f64, [f64; 2]) {
     let m = 0.5 * (a + b);
-    let r = (0.25 * (a - b) * (a - b) + c * c).sqrt();
-    let theta = 0.5 * (2.0 * c).atan2(a - b);
-    (m + r, m - r, [theta.cos(), theta.sin()])
+    let h = 0.5 * (a - b);
+    let r = (h * h + c * c).sqrt();
+    // The eigenvector of l1 = m + r is (l1 - b, c) = (h + r, c), or
+    // equally (c, r - h): take the one whose large component is h + r or
+    // r - h, whichever is >= r, so no cancellation (no trigonometry: this
+    // is on the assembly's hot path). An isotropic tensor (r = 0) takes
+    // n1 = e1.
+    let v = if h >= 0.0 { [h + r, c] } else { [c, r - h] };
+    let len = (v[0] * v[0] + v[1] * v[1]).sqrt();
+    let n1 = if len > 0.0 {
+        [v[0] / len, v[1] / len]
+    } else {
+        [1.0, 0.0]
+    };
+    (m + r, m - r, n1)
 }
 
 /// Applies, in the principal basis `(n1, n2)`, the diagonal scaling

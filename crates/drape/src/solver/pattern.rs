@@ -159,7 +159,20 @@ impl SparsePattern {
         self.diagonal[d]
     }
 
-    /// Largest `|A_ij - A_ji|` relative to the largest `|A_ij|` (0 for a zero matrix).
+    /// Whether `values` is symmetric to `tolerance` relative to its largest
+    /// entry ([`SparsePattern::asymmetry`] `<= tolerance`), stopping at the
+    /// first entry that is not.
+    pub fn is_symmetric(&self, values: &[f64], tolerance: f64) -> bool {
+        let max = values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let bound = tolerance * max;
+        values
+            .iter()
+            .zip(&self.transpose)
+            .all(|(v, &t)| (v - values[t]).abs() <= bound)
+    }
+
+    /// Largest `|A_ij - A_ji|` relative to the largest `|A_ij|` (0 for a
+    /// zero matrix).
     pub fn asymmetry(&self, values: &[f64]) -> f64 {
         let mut max = 0.0f64;
         let mut diff = 0.0f64;
