@@ -80,6 +80,11 @@ pub struct Summary {
     pub cutbacks: usize,
     /// Wall-clock time of the run (s).
     pub wall_seconds: f64,
+    /// Of which: set-up before the first step (s) — linear-solver
+    /// structures, the initial acceleration, the initial outputs (of this
+    /// session, for a resumed run). `wall_seconds - setup_seconds` is the
+    /// time of the steps.
+    pub setup_seconds: f64,
     /// Nodes of the mesh.
     pub nodes: usize,
     /// Elements of the mesh.
@@ -481,6 +486,7 @@ pub fn run_with(
         };
         (state, counters, writer, vec![(0.0, 0)])
     };
+    let setup_seconds = start.elapsed().as_secs_f64();
     let mut last_contact = contact_report(&state);
     let mut failure: Option<RunError> = None;
     let mut interrupted = false;
@@ -630,6 +636,7 @@ pub fn run_with(
         counters.last_strain,
     );
     summary.wall_seconds += counters.wall_seconds;
+    summary.setup_seconds = setup_seconds;
     summary.linear = ws.newton.linear.stats;
     summary.first_contact_time = counters.first_contact_time;
     if interrupted {
@@ -674,6 +681,7 @@ fn summary(
         newton_iterations: iterations,
         cutbacks,
         wall_seconds: start.elapsed().as_secs_f64(),
+        setup_seconds: 0.0,
         nodes: model.mesh.node_count(),
         elements: model.mesh.element_count(),
         dofs: model.dofs(),

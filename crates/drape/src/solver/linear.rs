@@ -20,6 +20,7 @@
 //! Each symbolic analysis is made once, on first use, and kept; numeric
 //! factors are written into storage that is reused from call to call.
 
+use super::amg::{Amg, BlockCsr};
 use super::block_lu::BlockLu;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -52,6 +53,10 @@ pub enum Factorization {
     /// Conjugate gradients preconditioned by the inverted 3x3 diagonal
     /// blocks (symmetric matrices).
     BlockJacobiCg,
+    /// Conjugate gradients preconditioned by a multigrid V-cycle.
+    MultigridCg,
+    /// GMRES preconditioned by a multigrid V-cycle (non-symmetric).
+    MultigridGmres,
 }
 
 /// What the linear solver has done (for reports and benchmarks).
@@ -69,6 +74,8 @@ pub struct LinearStats {
     pub block_lu_factorizations: usize,
     /// Solves with the factor of an earlier matrix (Newton's chord steps).
     pub chord_solves: usize,
+    /// Multigrid hierarchies built (the `iterative` path).
+    pub multigrid_builds: usize,
 }
 
 /// Above this many unknowns `auto` reuses factorisations, and no solve
@@ -86,6 +93,9 @@ const BLOCK_LU_MAX_SYMMETRIC: usize = 5_000;
 const BLOCK_LU_MAX_GENERAL: usize = 15_000;
 /// Krylov iterations a reused factor gets before the matrix is refactorised.
 const REUSE_ITERATIONS: usize = 8;
+/// Most multigrid-preconditioned Krylov iterations before the one-level
+/// preconditioner is tried.
+const MULTIGRID_ITERATIONS: usize = 100;
 /// Systems from this many unknowns multiply by the matrix on all threads.
 const PARALLEL_MATVEC_ABOVE: usize = 50_000;
 /// Most block-Jacobi GMRES iterations before LU takes over.
@@ -98,6 +108,8 @@ enum Preconditioner {
     Cholesky,
     /// Inverted 3x3 diagonal blocks.
     BlockJacobi,
+    /// A V-cycle of the smoothed-aggregation multigrid.
+    Multigrid,
 }
 
 /// How linear systems are solved (`[solver] linear`).
@@ -161,6 +173,125 @@ pub enum LinearSolveError {
     Factorization(String),
 }
 
+/// The multigrid path: the Hessian in 3x3 blocks by rows (its structure
+/// kept, values gathered per solve) and the hierarchy built from it.
+///
+/// Building the hierarchy (aggregation, Galerkin products) costs about as
+/// much as ten V-cycles, so it is kept across Newton iterations and steps
+/// — only the finest level's matrix and smoother follow each new Hessian
+/// — and rebuilt when a solve needs more than half as many iterations
+/// again as the first one after the last build.
+struct Multigrid {
+    /// Per block of the finest matrix: value index of its entry (0, 0)
+    /// and the index distance between its columns in the scalar values.
+    source: Vec<(usize, usize)>,
+    /// The finest matrix while no hierarchy holds it.
+    finest: Option<BlockCsr>,
+    amg: Option<Amg>,
+    /// Krylov iterations of the first solve after the last build, and of
+    /// the last solve.
+    fresh_iterations: usize,
+    last_iterations: usize,
+    /// Hierarchies built.
+    builds: usize,
+}
+
+impl Multigrid {
+    fn new(node_ptr: &[usize], node_rows: &[usize]) -> Self {
+        let n = node_ptr.len() - 1;
+        let mut source = Vec::with_capacity(node_rows.len());
+        for a in 0..n {
+            for &b in &node_rows[node_ptr[a]..node_ptr[a + 1]] {
+                // Block (a, b): row a of column b.
+                let p = node_ptr[b]
+                    + node_rows[node_ptr[b]..node_ptr[b + 1]]
+                        .binary_search(&a)
+                        .unwrap_or(0);
+                let deg = node_ptr[b + 1] - node_ptr[b];
+                source.push((9 * node_ptr[b] + 3 * (p - node_ptr[b]), 3 * deg));
+            }
+        }
+        Self {
+            source,
+            finest: Some(BlockCsr {
+                ptr: node_ptr.to_vec(),
+                cols: node_rows.iter().map(|&c| c as u32).collect(),
+                vals: vec![[0.0; 9]; node_rows.len()],
+                ncols: n,
+            }),
+            amg: None,
+            fresh_iterations: 0,
+            last_iterations: usize::MAX,
+            builds: 0,
+        }
+    }
+
+    /// Copies the blocks of the scalar CSC `values` into `blocks`.
+    fn gather(source: &[(usize, usize)], values: &[f64], blocks: &mut [[f64; 9]]) {
+        use rayon::prelude::*;
+        let gather = |(v, &(b, t)): (&mut [f64; 9], &(usize, usize))| {
+            *v = [
+                values[b],
+                values[b + t],
+                values[b + 2 * t],
+                values[b + 1],
+                values[b + 1 + t],
+                values[b + 1 + 2 * t],
+                values[b + 2],
+                values[b + 2 + t],
+                values[b + 2 + 2 * t],
+            ];
+        };
+        if source.len() > 100_000 {
+            blocks.par_iter_mut().zip(source).for_each(gather);
+        } else {
+            blocks.iter_mut().zip(source).for_each(gather);
+        }
+    }
+
+    /// Makes the preconditioner for `values`: the kept hierarchy with the
+    /// new finest matrix while it serves, a new one otherwise. `false` if
+    /// none can be built.
+    fn setup(&mut self, values: &[f64], stats: &mut LinearStats) -> bool {
+        let rebuild = self.amg.is_none()
+            || self.last_iterations > self.fresh_iterations + self.fresh_iterations / 2 + 2;
+        if !rebuild {
+            let source = &self.source;
+            let amg = self.amg.as_mut().expect("checked above");
+            if amg.refresh_finest(|blocks| Self::gather(source, values, blocks)) {
+                return true;
+            }
+        }
+        let mut finest = match (self.finest.take(), self.amg.take()) {
+            (Some(f), _) => f,
+            (None, Some(amg)) => amg.into_finest(),
+            (None, None) => return false,
+        };
+        Self::gather(&self.source, values, &mut finest.vals);
+        self.builds += 1;
+        stats.multigrid_builds += 1;
+        self.fresh_iterations = usize::MAX;
+        match Amg::new(finest) {
+            Ok(amg) => {
+                self.amg = Some(amg);
+                true
+            }
+            Err(finest) => {
+                self.finest = Some(finest);
+                false
+            }
+        }
+    }
+
+    /// Records the iterations of a solve with the current hierarchy.
+    fn record(&mut self, iterations: usize) {
+        self.last_iterations = iterations;
+        if self.fresh_iterations == usize::MAX {
+            self.fresh_iterations = iterations;
+        }
+    }
+}
+
 /// Sparse direct solver bound to one sparsity pattern.
 pub struct LinearSolver {
     symbolic: SymbolicSparseColMat<usize>,
@@ -190,11 +321,17 @@ pub struct LinearSolver {
     /// its block LU (analysed on first use).
     node_graph: Option<(Vec<usize>, Vec<usize>)>,
     block_lu: Option<BlockLu>,
+    /// The multigrid path (iterative mode, node-block patterns).
+    multigrid: Option<Multigrid>,
+    /// Whether the multigrid's finest matrix holds the values being solved
+    /// for (products then use its 3x3 blocks).
+    blocks_current: bool,
     /// How the last system was solved, if it succeeded.
     last_used: Option<Factorization>,
 }
 
 struct Krylov {
+    mg_in: Vec<f64>,
     symmetric_part: Vec<f64>,
     blocks: Vec<[[f64; 3]; 3]>,
     basis: Vec<Vec<f64>>,
@@ -208,6 +345,7 @@ struct Krylov {
 impl Default for Krylov {
     fn default() -> Self {
         Self {
+            mg_in: Vec::new(),
             symmetric_part: Vec::new(),
             blocks: Vec::new(),
             basis: Vec::new(),
@@ -255,6 +393,8 @@ impl LinearSolver {
             factor_kept: false,
             node_graph: None,
             block_lu: None,
+            multigrid: None,
+            blocks_current: false,
             last_used: None,
             stats: LinearStats::default(),
             krylov_tolerance: 1e-12,
@@ -411,9 +551,61 @@ impl LinearSolver {
         }
         if used.is_none() && mode == LinearMode::Iterative {
             let tolerance = self.krylov_tolerance;
+            if self.multigrid.is_none()
+                && let Some((ptr, rows)) = &self.node_graph
+            {
+                self.multigrid = Some(Multigrid::new(ptr, rows));
+            }
+            // A kept hierarchy that fails is rebuilt once for this matrix.
+            for _ in 0..2 {
+                let Some(mg) = self.multigrid.as_mut() else {
+                    break;
+                };
+                let builds = mg.builds;
+                if !mg.setup(values, &mut self.stats) {
+                    break;
+                }
+                let fresh = mg.builds > builds;
+                self.blocks_current = true;
+                let ok = if symmetric {
+                    self.pcg(
+                        values,
+                        rhs,
+                        Preconditioner::Multigrid,
+                        tolerance,
+                        MULTIGRID_ITERATIONS,
+                    )
+                } else {
+                    self.gmres(values, rhs, Preconditioner::Multigrid, MULTIGRID_ITERATIONS)?
+                };
+                self.blocks_current = false;
+                let iterations = self.last_krylov_iterations;
+                let mg = self.multigrid.as_mut().expect("checked above");
+                mg.record(if ok { iterations } else { usize::MAX });
+                if ok {
+                    used = Some(if symmetric {
+                        Factorization::MultigridCg
+                    } else {
+                        Factorization::MultigridGmres
+                    });
+                    break;
+                }
+                if fresh {
+                    break;
+                }
+            }
+        }
+        if used.is_none() && mode == LinearMode::Iterative {
+            let tolerance = self.krylov_tolerance;
             if symmetric
                 && self.factor_block_jacobi(values)
-                && self.pcg(values, rhs, tolerance, ITERATIVE_ITERATIONS)
+                && self.pcg(
+                    values,
+                    rhs,
+                    Preconditioner::BlockJacobi,
+                    tolerance,
+                    ITERATIVE_ITERATIONS,
+                )
             {
                 used = Some(Factorization::BlockJacobiCg);
             } else if self.factor_block_jacobi(values)
@@ -496,6 +688,8 @@ impl LinearSolver {
                         Factorization::ReusedFactorGmres => "GMRES with a reused factor",
                         Factorization::BlockJacobiGmres => "block-Jacobi GMRES",
                         Factorization::BlockJacobiCg => "block-Jacobi CG",
+                        Factorization::MultigridCg => "multigrid CG",
+                        Factorization::MultigridGmres => "multigrid GMRES",
                     },
                     residual / b_norm
                 ),
@@ -620,6 +814,12 @@ impl LinearSolver {
     /// (structurally symmetric patterns) compute it row by row in parallel:
     /// row `c` of `A` is column `c` read through the transpose map.
     fn matvec(&self, values: &[f64], x: &[f64], out: &mut [f64]) {
+        if self.blocks_current
+            && let Some(amg) = self.multigrid.as_ref().and_then(|m| m.amg.as_ref())
+        {
+            amg.finest().matvec(x, out);
+            return;
+        }
         let (col_ptr, row_idx) = (self.symbolic.col_ptr(), self.symbolic.row_idx());
         if let Some(transpose) = self.transpose.as_deref()
             && self.dimension() >= PARALLEL_MATVEC_ABOVE
@@ -705,10 +905,37 @@ impl LinearSolver {
         ok
     }
 
+    /// `z = P^-1 r` (block Jacobi or multigrid).
+    fn precondition_slice(&mut self, kind: Preconditioner, r: &[f64], z: &mut [f64]) {
+        match kind {
+            Preconditioner::Multigrid => {
+                if let Some(amg) = self.multigrid.as_mut().and_then(|m| m.amg.as_mut()) {
+                    amg.apply(r, z);
+                } else {
+                    z.copy_from_slice(r);
+                }
+            }
+            _ => {
+                for (i, m) in self.krylov.blocks.iter().enumerate() {
+                    let v = [r[3 * i], r[3 * i + 1], r[3 * i + 2]];
+                    for row in 0..3 {
+                        z[3 * i + row] = m[row][0] * v[0] + m[row][1] * v[1] + m[row][2] * v[2];
+                    }
+                }
+            }
+        }
+    }
+
     fn precondition(&mut self, kind: Preconditioner, x: &mut Mat<f64>) {
         match kind {
             Preconditioner::Cholesky => self.cholesky_solve(x),
-
+            Preconditioner::Multigrid => {
+                let mut r = std::mem::take(&mut self.krylov.mg_in);
+                r.clear();
+                r.extend_from_slice(x.col_as_slice_mut(0));
+                self.precondition_slice(kind, &r, x.col_as_slice_mut(0));
+                self.krylov.mg_in = r;
+            }
             Preconditioner::BlockJacobi => {
                 let n = self.dimension();
                 for (i, m) in self.krylov.blocks.iter().enumerate() {
@@ -878,7 +1105,14 @@ impl LinearSolver {
     /// definite `A`: to `|b - A x| <= tolerance |b|` in at most
     /// `max_iterations`. The solution is left in `self.rhs`; `false` when
     /// it has not converged (or `A` showed a non-positive curvature).
-    fn pcg(&mut self, values: &[f64], b: &[f64], tolerance: f64, max_iterations: usize) -> bool {
+    fn pcg(
+        &mut self,
+        values: &[f64],
+        b: &[f64],
+        preconditioner: Preconditioner,
+        tolerance: f64,
+        max_iterations: usize,
+    ) -> bool {
         let n = self.dimension();
         let b_norm = b.iter().map(|v| v * v).sum::<f64>().sqrt();
         let mut x = std::mem::take(&mut self.krylov.x);
@@ -892,20 +1126,11 @@ impl LinearSolver {
         ap.resize(n, 0.0);
         let mut z = std::mem::take(&mut self.krylov.symmetric_part);
         z.resize(n, 0.0);
-        let blocks = std::mem::take(&mut self.krylov.blocks);
-        let apply = |r: &[f64], z: &mut [f64]| {
-            for (i, m) in blocks.iter().enumerate() {
-                let v = [r[3 * i], r[3 * i + 1], r[3 * i + 2]];
-                for row in 0..3 {
-                    z[3 * i + row] = m[row][0] * v[0] + m[row][1] * v[1] + m[row][2] * v[2];
-                }
-            }
-        };
         let dot = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(a, c)| a * c).sum::<f64>();
         let mut converged = b_norm == 0.0;
         let mut iterations = 0;
         if !converged && n.is_multiple_of(3) {
-            apply(&r, &mut z);
+            self.precondition_slice(preconditioner, &r, &mut z);
             p.clear();
             p.extend_from_slice(&z);
             let mut rz = dot(&r, &z);
@@ -925,7 +1150,7 @@ impl LinearSolver {
                     converged = true;
                     break;
                 }
-                apply(&r, &mut z);
+                self.precondition_slice(preconditioner, &r, &mut z);
                 let rz_new = dot(&r, &z);
                 let beta = rz_new / rz;
                 rz = rz_new;
@@ -934,7 +1159,6 @@ impl LinearSolver {
                 }
             }
         }
-        self.krylov.blocks = blocks;
         self.last_krylov_iterations = iterations;
         self.stats.krylov_iterations += iterations;
         for i in 0..n {
@@ -958,7 +1182,9 @@ impl LinearSolver {
     /// tens of seconds and gigabytes. Falls back to [`LinearSolver::solve`]
     /// if CG does not converge in 1,000 iterations.
     pub fn solve_mass(&mut self, values: &[f64], rhs: &mut [f64]) -> Result<(), LinearSolveError> {
-        if self.factor_block_jacobi(values) && self.pcg(values, rhs, 1e-14, 1000) {
+        if self.factor_block_jacobi(values)
+            && self.pcg(values, rhs, Preconditioner::BlockJacobi, 1e-14, 1000)
+        {
             self.stats.solves += 1;
             for (i, x) in rhs.iter_mut().enumerate() {
                 *x = self.rhs[(i, 0)];

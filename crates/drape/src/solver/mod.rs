@@ -1,5 +1,6 @@
 //! Sparse linear algebra and the Newton–Raphson iteration (SPEC §1.7).
 
+pub mod amg;
 pub mod block_lu;
 pub mod linear;
 pub mod newton;

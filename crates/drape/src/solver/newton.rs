@@ -212,8 +212,7 @@ pub fn solve(
         // reduce their residual as far as Newton's is from zero, so the
         // tolerance follows |G| (keeping quadratic convergence) and is
         // 1e-12 near the solution.
-        ws.linear.krylov_tolerance =
-            (residual / eval.scale.max(f64::MIN_POSITIVE)).clamp(1e-12, 1e-4);
+        ws.linear.krylov_tolerance = (residual / r0.max(f64::MIN_POSITIVE)).clamp(1e-12, 1e-4);
         report.factorization = Some(ws.linear.solve(&ws.h, eval.symmetric, &mut ws.dy)?);
         system.transform_increment(&mut ws.dy);
         // Backtracking on |G|: full steps as long as they reduce the
