@@ -239,29 +239,52 @@ impl Model {
         }
     }
 
+    /// Fractions of taut, wrinkled and slack elements at positions `y`
+    /// (as [`ElementResults::state_fractions`], without storing the
+    /// per-element results).
+    pub fn state_fractions(&self, y: &[f64]) -> [f64; 3] {
+        let count = |e: usize| {
+            let mut c = [0usize; 3];
+            c[self.element_result(e, y).2.clamp(0, 2) as usize] = 1;
+            c
+        };
+        let add = |a: [usize; 3], b: [usize; 3]| [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+        let elements = 0..self.mesh.element_count();
+        let total = if self.parallel() {
+            elements.into_par_iter().map(count).reduce(|| [0; 3], add)
+        } else {
+            elements.map(count).fold([0; 3], add)
+        };
+        let n = self.mesh.element_count().max(1) as f64;
+        total.map(|c| c as f64 / n)
+    }
+
+    /// Mean stress, principal stresses and wrinkling state of element `e`.
+    fn element_result(&self, e: usize, y: &[f64]) -> ([f64; 3], [f64; 2], i32) {
+        let n = self.mesh.order.nodes_per_element();
+        let ye = self.element_positions(e, y);
+        let (grad, weight) = self.geometry.element(e);
+        let (s, strain) =
+            element_stress(self.material.as_ref(), self.section, &ye[..n], grad, weight);
+        let (s1, s2) = principal_values(s);
+        // An unstressed element (a fabric in free fall) is slack,
+        // whatever the round-off in its stress says.
+        let state = if s1.abs().max(s2.abs()) < UNSTRESSED {
+            2
+        } else {
+            match self.material.wrinkle_state(strain) {
+                Some(state) => state as i32,
+                None if s2 >= 0.0 => 0,
+                None if s1 > 0.0 => 1,
+                None => 2,
+            }
+        };
+        (s, [s1, s2], state)
+    }
+
     /// Mean stress and principal stresses of every element at positions `y`.
     pub fn element_results(&self, y: &[f64]) -> ElementResults {
-        let n = self.mesh.order.nodes_per_element();
-        let result = |e: usize| {
-            let ye = self.element_positions(e, y);
-            let (grad, weight) = self.geometry.element(e);
-            let (s, strain) =
-                element_stress(self.material.as_ref(), self.section, &ye[..n], grad, weight);
-            let (s1, s2) = principal_values(s);
-            // An unstressed element (a fabric in free fall) is slack,
-            // whatever the round-off in its stress says.
-            let state = if s1.abs().max(s2.abs()) < UNSTRESSED {
-                2
-            } else {
-                match self.material.wrinkle_state(strain) {
-                    Some(state) => state as i32,
-                    None if s2 >= 0.0 => 0,
-                    None if s1 > 0.0 => 1,
-                    None => 2,
-                }
-            };
-            (s, [s1, s2], state)
-        };
+        let result = |e: usize| self.element_result(e, y);
         let elements = 0..self.mesh.element_count();
         let per_element: Vec<([f64; 3], [f64; 2], i32)> = if self.parallel() {
             elements.into_par_iter().map(result).collect()

@@ -85,6 +85,14 @@ pub struct Summary {
     /// session, for a resumed run). `wall_seconds - setup_seconds` is the
     /// time of the steps.
     pub setup_seconds: f64,
+    /// Of which: writing the history rows and field frames after the set-up
+    /// (s). `wall_seconds - setup_seconds - output_seconds` is the time of
+    /// the mechanics and the solvers.
+    pub output_seconds: f64,
+    /// Of which: the first step of this session (s), without its outputs;
+    /// it also builds what the linear solver keeps across steps (symbolic
+    /// factorisations, the multigrid hierarchy).
+    pub first_step_seconds: f64,
     /// Nodes of the mesh.
     pub nodes: usize,
     /// Elements of the mesh.
@@ -487,6 +495,8 @@ pub fn run_with(
         (state, counters, writer, vec![(0.0, 0)])
     };
     let setup_seconds = start.elapsed().as_secs_f64();
+    let mut output_seconds = 0.0;
+    let mut first_step_seconds = None;
     let mut last_contact = contact_report(&state);
     let mut failure: Option<RunError> = None;
     let mut interrupted = false;
@@ -517,6 +527,11 @@ pub fn run_with(
                         {
                             counters.first_contact_time = Some(state.time);
                         }
+                        if first_step_seconds.is_none() {
+                            first_step_seconds =
+                                Some(start.elapsed().as_secs_f64() - setup_seconds);
+                        }
+                        let output_start = Instant::now();
                         let kinetic = writer.row(
                             &state,
                             &StepRecord {
@@ -527,9 +542,10 @@ pub fn run_with(
                                 cutbacks: depth,
                                 min_stretch: stretch,
                                 contact: last_contact.clone(),
-                                states: model.element_results(&state.positions).state_fractions(),
+                                states: model.state_fractions(&state.positions),
                             },
                         )?;
+                        output_seconds += output_start.elapsed().as_secs_f64();
                         observer(&StepInfo {
                             step,
                             time: state.time,
@@ -545,7 +561,9 @@ pub fn run_with(
                         });
                         counters.since_frame += 1;
                         if counters.since_frame >= setup.output_every {
+                            let output_start = Instant::now();
                             writer.frame(step, &state, last_contact.as_ref())?;
+                            output_seconds += output_start.elapsed().as_secs_f64();
                             frames.push((state.time, step));
                             counters.last_written = step;
                             counters.since_frame = 0;
@@ -611,7 +629,9 @@ pub fn run_with(
         }
     }
     if counters.last_written != counters.step && !interrupted {
+        let output_start = Instant::now();
         writer.frame(counters.step, &state, last_contact.as_ref())?;
+        output_seconds += output_start.elapsed().as_secs_f64();
     }
     let kinetic = model.kinetic_energy(&state.velocities, &mut writer.scratch);
     let message = if interrupted {
@@ -637,6 +657,8 @@ pub fn run_with(
     );
     summary.wall_seconds += counters.wall_seconds;
     summary.setup_seconds = setup_seconds;
+    summary.output_seconds = output_seconds;
+    summary.first_step_seconds = first_step_seconds.unwrap_or(0.0);
     summary.linear = ws.newton.linear.stats;
     summary.first_contact_time = counters.first_contact_time;
     if interrupted {
@@ -682,6 +704,8 @@ fn summary(
         cutbacks,
         wall_seconds: start.elapsed().as_secs_f64(),
         setup_seconds: 0.0,
+        output_seconds: 0.0,
+        first_step_seconds: 0.0,
         nodes: model.mesh.node_count(),
         elements: model.mesh.element_count(),
         dofs: model.dofs(),
