@@ -97,6 +97,8 @@ const REUSE_ITERATIONS: usize = 8;
 /// Most multigrid-preconditioned Krylov iterations before the one-level
 /// preconditioner is tried.
 const MULTIGRID_ITERATIONS: usize = 100;
+/// Solves that skip multigrid after a freshly built hierarchy failed.
+const MULTIGRID_BACKOFF: usize = 8;
 /// Systems from this many unknowns multiply by the matrix on all threads.
 const PARALLEL_MATVEC_ABOVE: usize = 50_000;
 /// Most block-Jacobi GMRES iterations before LU takes over.
@@ -197,6 +199,10 @@ struct Multigrid {
     last_iterations: usize,
     /// Hierarchies built.
     builds: usize,
+    /// Solves to leave to the fallback after a fresh hierarchy failed
+    /// (rebuilding for every solve of a problem multigrid cannot handle
+    /// would cost more than the fallback itself).
+    skip: usize,
 }
 
 impl Multigrid {
@@ -226,6 +232,7 @@ impl Multigrid {
             fresh_iterations: 0,
             last_iterations: usize::MAX,
             builds: 0,
+            skip: 0,
         }
     }
 
@@ -568,6 +575,10 @@ impl LinearSolver {
                 let Some(mg) = self.multigrid.as_mut() else {
                     break;
                 };
+                if mg.skip > 0 {
+                    mg.skip -= 1;
+                    break;
+                }
                 let builds = mg.builds;
                 if !mg.setup(values, &mut self.stats) {
                     break;
@@ -598,6 +609,7 @@ impl LinearSolver {
                     break;
                 }
                 if fresh {
+                    mg.skip = MULTIGRID_BACKOFF;
                     break;
                 }
             }
