@@ -28,7 +28,7 @@
 //! positive definite and preconditions conjugate gradients; for the
 //! non-symmetric wrinkling tangent it preconditions GMRES.
 
-use super::block_lu::{Block, BlockLu};
+use super::block_lu::{Block, BlockLu, IDENTITY, invert, mul, mul_acc, mul_vec, transpose};
 use rayon::prelude::*;
 
 /// The coarsest level has at most this many nodes (factorised directly).
@@ -38,71 +38,10 @@ const SWEEPS: usize = 1;
 /// Levels with more rows than this run their loops on all threads.
 const PARALLEL_ROWS: usize = 20_000;
 
-#[inline(always)]
-fn mul(a: &Block, b: &Block) -> Block {
-    let mut c = [0.0; 9];
-    for r in 0..3 {
-        for k in 0..3 {
-            let s = a[3 * r + k];
-            for q in 0..3 {
-                c[3 * r + q] += s * b[3 * k + q];
-            }
-        }
-    }
-    c
-}
-
-#[inline(always)]
-fn mul_add(c: &mut Block, a: &Block, b: &Block) {
-    for r in 0..3 {
-        for k in 0..3 {
-            let s = a[3 * r + k];
-            for q in 0..3 {
-                c[3 * r + q] += s * b[3 * k + q];
-            }
-        }
-    }
-}
-
-#[inline(always)]
-fn transpose(a: &Block) -> Block {
-    [a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8]]
-}
-
-#[inline(always)]
-fn mul_vec(a: &Block, x: &[f64]) -> [f64; 3] {
-    [
-        a[0] * x[0] + a[1] * x[1] + a[2] * x[2],
-        a[3] * x[0] + a[4] * x[1] + a[5] * x[2],
-        a[6] * x[0] + a[7] * x[1] + a[8] * x[2],
-    ]
-}
-
-const IDENTITY: Block = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
-
 /// Inverse of a 3x3 block, or the identity if it is singular (a smoother
 /// that skips a node rather than failing).
 fn invert_or_identity(m: &Block) -> Block {
-    let c00 = m[4] * m[8] - m[5] * m[7];
-    let c01 = m[5] * m[6] - m[3] * m[8];
-    let c02 = m[3] * m[7] - m[4] * m[6];
-    let det = m[0] * c00 + m[1] * c01 + m[2] * c02;
-    let scale = m.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    if !det.is_finite() || det.abs() <= 1e-14 * scale * scale * scale {
-        return IDENTITY;
-    }
-    let d = 1.0 / det;
-    [
-        c00 * d,
-        (m[2] * m[7] - m[1] * m[8]) * d,
-        (m[1] * m[5] - m[2] * m[4]) * d,
-        c01 * d,
-        (m[0] * m[8] - m[2] * m[6]) * d,
-        (m[2] * m[3] - m[0] * m[5]) * d,
-        c02 * d,
-        (m[1] * m[6] - m[0] * m[7]) * d,
-        (m[0] * m[4] - m[1] * m[3]) * d,
-    ]
+    invert(m).unwrap_or(IDENTITY)
 }
 
 /// A sparse matrix of 3x3 blocks by rows, columns sorted in each row.
@@ -191,7 +130,7 @@ impl BlockCsr {
                             dense[c] = [0.0; 9];
                             list.push(c as u32);
                         }
-                        mul_add(&mut dense[c], a, &other.vals[q]);
+                        mul_acc::<false>(&mut dense[c], a, &other.vals[q]);
                     }
                 }
                 list.sort_unstable();
@@ -575,16 +514,8 @@ mod tests {
     /// a graph Laplacian in each component (the stiffness, weight 1) plus
     /// `mass` on the diagonal.
     fn grid(n: usize, mass: f64) -> BlockCsr {
-        let id = |i: usize, j: usize| j * (n + 1) + i;
-        let mut elements = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                elements.push(vec![id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                elements.push(vec![id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
         let nodes = (n + 1) * (n + 1);
-        let p = SparsePattern::new(nodes, elements.iter().map(|e| e.as_slice()));
+        let p = SparsePattern::triangle_grid(n, n);
         let (ptr, rows) = p.node_graph();
         let mut vals = Vec::new();
         for r in 0..nodes {

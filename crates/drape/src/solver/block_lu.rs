@@ -65,8 +65,9 @@ pub enum BlockLuError {
     Ordering(String),
 }
 
+/// `a b`.
 #[inline(always)]
-fn mul(a: &Block, b: &Block) -> Block {
+pub(crate) fn mul(a: &Block, b: &Block) -> Block {
     let mut c = [0.0; 9];
     for r in 0..3 {
         for k in 0..3 {
@@ -79,26 +80,35 @@ fn mul(a: &Block, b: &Block) -> Block {
     c
 }
 
-/// `c -= a b`.
+/// `c -= a b` (`SUBTRACT`) or `c += a b`.
 #[inline(always)]
-fn mul_sub(c: &mut Block, a: &Block, b: &Block) {
+pub(crate) fn mul_acc<const SUBTRACT: bool>(c: &mut Block, a: &Block, b: &Block) {
     for r in 0..3 {
         for k in 0..3 {
-            let s = a[3 * r + k];
+            let s = if SUBTRACT {
+                -a[3 * r + k]
+            } else {
+                a[3 * r + k]
+            };
             for q in 0..3 {
-                c[3 * r + q] -= s * b[3 * k + q];
+                c[3 * r + q] += s * b[3 * k + q];
             }
         }
     }
 }
 
+/// The 3x3 identity.
+pub(crate) const IDENTITY: Block = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+
+/// `a^T`.
 #[inline(always)]
-fn transpose(a: &Block) -> Block {
+pub(crate) fn transpose(a: &Block) -> Block {
     [a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8]]
 }
 
+/// `a x` for the three entries of `x`.
 #[inline(always)]
-fn mul_vec(a: &Block, x: [f64; 3]) -> [f64; 3] {
+pub(crate) fn mul_vec(a: &Block, x: &[f64]) -> [f64; 3] {
     [
         a[0] * x[0] + a[1] * x[1] + a[2] * x[2],
         a[3] * x[0] + a[4] * x[1] + a[5] * x[2],
@@ -108,7 +118,7 @@ fn mul_vec(a: &Block, x: [f64; 3]) -> [f64; 3] {
 
 /// Inverse of a 3x3 block, `None` when its determinant is below `1e-13`
 /// of the cube of its largest entry (or not finite).
-fn invert(m: &Block) -> Option<Block> {
+pub(crate) fn invert(m: &Block) -> Option<Block> {
     let c00 = m[4] * m[8] - m[5] * m[7];
     let c01 = m[5] * m[6] - m[3] * m[8];
     let c02 = m[3] * m[7] - m[4] * m[6];
@@ -129,6 +139,25 @@ fn invert(m: &Block) -> Option<Block> {
         (m[1] * m[6] - m[0] * m[7]) * d,
         (m[0] * m[4] - m[1] * m[3]) * d,
     ])
+}
+
+/// The 3x3 block of scalar CSC `values` whose entry `(0, 0)` is at `base`,
+/// with its columns `stride` apart (the layout of
+/// [`super::SparsePattern`]: rows of a block are consecutive).
+#[inline(always)]
+pub(crate) fn gather_block(values: &[f64], base: usize, stride: usize) -> Block {
+    let (b, t) = (base, stride);
+    [
+        values[b],
+        values[b + t],
+        values[b + 2 * t],
+        values[b + 1],
+        values[b + 1 + t],
+        values[b + 1 + 2 * t],
+        values[b + 2],
+        values[b + 2 + t],
+        values[b + 2 + 2 * t],
+    ]
 }
 
 /// Where block `(I, J)` of the permuted matrix sits in the scalar CSC
@@ -362,18 +391,7 @@ impl BlockLu {
 
     #[inline(always)]
     fn gather(values: &[f64], s: &Source) -> Block {
-        let (b, t) = (s.base, s.stride);
-        [
-            values[b],
-            values[b + t],
-            values[b + 2 * t],
-            values[b + 1],
-            values[b + 1 + t],
-            values[b + 1 + 2 * t],
-            values[b + 2],
-            values[b + 2 + t],
-            values[b + 2 + 2 * t],
-        ]
+        gather_block(values, s.base, s.stride)
     }
 
     /// Factorises the matrix with scalar CSC values `values` (the layout
@@ -405,13 +423,13 @@ impl BlockLu {
                 let u_kj = self.u[pos];
                 for q in pos..end {
                     let i = self.l_rows[q] as usize;
-                    mul_sub(&mut self.x_col[i], &self.l[q], &u_kj);
+                    mul_acc::<true>(&mut self.x_col[i], &self.l[q], &u_kj);
                 }
                 if !symmetric {
                     let l_jk = self.l[pos];
                     for q in pos + 1..end {
                         let i = self.l_rows[q] as usize;
-                        mul_sub(&mut self.x_row[i], &l_jk, &self.u[q]);
+                        mul_acc::<true>(&mut self.x_row[i], &l_jk, &self.u[q]);
                     }
                 }
                 // Column k's next row.
@@ -472,11 +490,11 @@ impl BlockLu {
         }
         // L~ y = b, by columns.
         for j in 0..n {
-            let y = mul_vec(&self.d_inv[j], w[j]);
+            let y = mul_vec(&self.d_inv[j], &w[j]);
             w[j] = y;
             for q in self.l_ptr[j]..self.l_ptr[j + 1] {
                 let i = self.l_rows[q] as usize;
-                let t = mul_vec(&self.l[q], y);
+                let t = mul_vec(&self.l[q], &y);
                 for c in 0..3 {
                     w[i][c] -= t[c];
                 }
@@ -487,7 +505,7 @@ impl BlockLu {
             let mut s = w[j];
             for q in self.l_ptr[j]..self.l_ptr[j + 1] {
                 let i = self.l_rows[q] as usize;
-                let t = mul_vec(&self.u[q], w[i]);
+                let t = mul_vec(&self.u[q], &w[i]);
                 for c in 0..3 {
                     s[c] -= t[c];
                 }
@@ -510,16 +528,7 @@ mod tests {
     /// a matrix on it: `shift` on the diagonal, pseudo-random blocks
     /// elsewhere, skew part scaled by `skew`.
     fn grid_matrix(nx: usize, ny: usize, shift: f64, skew: f64) -> (SparsePattern, Vec<f64>) {
-        let id = |i: usize, j: usize| j * (nx + 1) + i;
-        let mut elements = Vec::new();
-        for j in 0..ny {
-            for i in 0..nx {
-                elements.push(vec![id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                elements.push(vec![id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        let nodes = (nx + 1) * (ny + 1);
-        let pattern = SparsePattern::new(nodes, elements.iter().map(|e| e.as_slice()));
+        let pattern = SparsePattern::triangle_grid(nx, ny);
         let n = pattern.dimension();
         let mut values = vec![0.0; pattern.nnz()];
         let hash = |r: usize, c: usize| {

@@ -21,7 +21,7 @@
 //! factors are written into storage that is reused from call to call.
 
 use super::amg::{Amg, BlockCsr};
-use super::block_lu::BlockLu;
+use super::block_lu::{BlockLu, gather_block};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::SupernodalThreshold;
@@ -142,6 +142,15 @@ pub enum LinearMode {
     Iterative,
 }
 
+/// `|a - b|` (Euclidean).
+fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (p - q) * (p - q))
+        .sum::<f64>()
+        .sqrt()
+}
+
 /// Inverse of a 3x3 matrix, `None` when (nearly) singular.
 fn invert3(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
     let c = |r: usize, k: usize| {
@@ -240,17 +249,7 @@ impl Multigrid {
     fn gather(source: &[(usize, usize)], values: &[f64], blocks: &mut [[f64; 9]]) {
         use rayon::prelude::*;
         let gather = |(v, &(b, t)): (&mut [f64; 9], &(usize, usize))| {
-            *v = [
-                values[b],
-                values[b + t],
-                values[b + 2 * t],
-                values[b + 1],
-                values[b + 1 + t],
-                values[b + 1 + 2 * t],
-                values[b + 2],
-                values[b + 2 + t],
-                values[b + 2 + 2 * t],
-            ];
+            *v = gather_block(values, b, t);
         };
         if source.len() > 100_000 {
             blocks.par_iter_mut().zip(source).for_each(gather);
@@ -479,13 +478,7 @@ impl LinearSolver {
                 *xi += di;
             }
             self.matvec(values, &x, &mut ax);
-            let r2 = b
-                .iter()
-                .zip(&ax)
-                .map(|(p, q)| (p - q) * (p - q))
-                .sum::<f64>()
-                .sqrt();
-            ok = r2 <= 1e-10 * b_norm;
+            ok = distance(b, &ax) <= 1e-10 * b_norm;
         }
         for (i, v) in x.iter().enumerate() {
             self.rhs[(i, 0)] = *v;
@@ -1097,25 +1090,13 @@ impl LinearSolver {
         }
         if !converged {
             self.matvec(values, &x, &mut ax);
-            let res = b
-                .iter()
-                .zip(&ax)
-                .map(|(p, q)| (p - q) * (p - q))
-                .sum::<f64>()
-                .sqrt();
-            converged = res <= self.krylov_tolerance.max(1e-10) * b_norm;
+            converged = distance(b, &ax) <= self.krylov_tolerance.max(1e-10) * b_norm;
         }
         self.krylov.basis = basis;
         self.krylov.work = work;
         self.krylov.r = r;
         self.krylov.ax = ax;
-        self.last_krylov_iterations = iterations;
-        self.stats.krylov_iterations += iterations;
-        for i in 0..n {
-            self.rhs[(i, 0)] = x[i];
-        }
-        let finite = x.iter().all(|v| v.is_finite());
-        self.krylov.x = x;
+        let finite = self.finish_krylov(iterations, x);
         Ok(converged && finite)
     }
 
@@ -1178,13 +1159,7 @@ impl LinearSolver {
                 }
             }
         }
-        self.last_krylov_iterations = iterations;
-        self.stats.krylov_iterations += iterations;
-        for i in 0..n {
-            self.rhs[(i, 0)] = x[i];
-        }
-        let finite = x.iter().all(|v| v.is_finite());
-        self.krylov.x = x;
+        let finite = self.finish_krylov(iterations, x);
         self.krylov.r = r;
         self.krylov.z = p;
         self.krylov.ax = ap;
@@ -1211,6 +1186,19 @@ impl LinearSolver {
             return Ok(());
         }
         self.solve(values, true, rhs).map(|_| ())
+    }
+
+    /// Records a Krylov solve's iterations, leaves its solution `x` in
+    /// `self.rhs` (keeping the buffer) and tells whether it is finite.
+    fn finish_krylov(&mut self, iterations: usize, x: Vec<f64>) -> bool {
+        self.last_krylov_iterations = iterations;
+        self.stats.krylov_iterations += iterations;
+        for (i, v) in x.iter().enumerate() {
+            self.rhs[(i, 0)] = *v;
+        }
+        let finite = x.iter().all(|v| v.is_finite());
+        self.krylov.x = x;
+        finite
     }
 
     fn solve_lu(&mut self, values: &[f64]) -> Result<(), LinearSolveError> {
@@ -1398,16 +1386,8 @@ mod tests {
     fn multigrid_path_solves_symmetric_and_nonsymmetric_systems() {
         use crate::solver::SparsePattern;
         let n = 30;
-        let id = |i: usize, j: usize| j * (n + 1) + i;
-        let mut elements = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                elements.push(vec![id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                elements.push(vec![id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
         let nodes = (n + 1) * (n + 1);
-        let p = SparsePattern::new(nodes, elements.iter().map(|e| e.as_slice()));
+        let p = SparsePattern::triangle_grid(n, n);
         let (ptr, rows) = p.node_graph();
         // Graph Laplacian per component plus mass, with a skew coupling.
         let matrix = |skew: f64| -> Vec<f64> {

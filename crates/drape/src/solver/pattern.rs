@@ -85,6 +85,21 @@ impl SparsePattern {
         pattern
     }
 
+    /// The pattern of an `nx x ny` grid of squares, each cut into two
+    /// triangles (nodes numbered row by row): test matrices of solvers.
+    #[cfg(test)]
+    pub(crate) fn triangle_grid(nx: usize, ny: usize) -> Self {
+        let id = |i: usize, j: usize| j * (nx + 1) + i;
+        let mut elements = Vec::new();
+        for j in 0..ny {
+            for i in 0..nx {
+                elements.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                elements.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        Self::new((nx + 1) * (ny + 1), elements.iter().map(|e| e.as_slice()))
+    }
+
     /// Number of rows (= columns).
     pub fn dimension(&self) -> usize {
         self.col_ptr.len() - 1
