@@ -116,9 +116,22 @@ impl BlockCsr {
     /// The product `self * other` (Gustavson's row-by-row algorithm).
     pub fn multiply(&self, other: &BlockCsr) -> BlockCsr {
         let n = other.ncols;
-        let row =
-            |acc: &mut (Vec<u32>, Vec<Block>, Vec<u32>), r: usize| -> (Vec<u32>, Vec<Block>) {
-                let (marker, dense, list) = acc;
+        // Rows in a few contiguous ranges, each with one dense accumulator
+        // of `n` blocks and flat outputs (no allocation per row).
+        let ranges = if self.rows() > PARALLEL_ROWS {
+            4 * rayon::current_num_threads()
+        } else {
+            1
+        };
+        let per = self.rows().div_ceil(ranges).max(1);
+        let range = |start: usize| -> (Vec<usize>, Vec<u32>, Vec<Block>) {
+            let end = (start + per).min(self.rows());
+            let mut marker = vec![u32::MAX; n];
+            let mut dense = vec![[0.0; 9]; n];
+            let mut list: Vec<u32> = Vec::new();
+            let (mut lens, mut cols, mut vals) =
+                (Vec::with_capacity(end - start), Vec::new(), Vec::new());
+            for r in start..end {
                 list.clear();
                 for k in self.ptr[r]..self.ptr[r + 1] {
                     let mid = self.cols[k] as usize;
@@ -134,28 +147,29 @@ impl BlockCsr {
                     }
                 }
                 list.sort_unstable();
-                let vals = list.iter().map(|&c| dense[c as usize]).collect();
-                (list.clone(), vals)
-            };
-        let init = || (vec![u32::MAX; n], vec![[0.0; 9]; n], Vec::new());
-        let rows: Vec<(Vec<u32>, Vec<Block>)> = if self.rows() > PARALLEL_ROWS {
-            (0..self.rows())
-                .into_par_iter()
-                .map_init(init, row)
-                .collect()
-        } else {
-            let mut acc = init();
-            (0..self.rows()).map(|r| row(&mut acc, r)).collect()
+                lens.push(list.len());
+                cols.extend_from_slice(&list);
+                vals.extend(list.iter().map(|&c| dense[c as usize]));
+            }
+            (lens, cols, vals)
         };
-        let mut ptr = Vec::with_capacity(rows.len() + 1);
+        let starts: Vec<usize> = (0..self.rows()).step_by(per).collect();
+        let parts: Vec<(Vec<usize>, Vec<u32>, Vec<Block>)> = if ranges > 1 {
+            starts.into_par_iter().map(range).collect()
+        } else {
+            starts.into_iter().map(range).collect()
+        };
+        let total: usize = parts.iter().map(|p| p.1.len()).sum();
+        let mut ptr = Vec::with_capacity(self.rows() + 1);
         ptr.push(0);
-        let total: usize = rows.iter().map(|r| r.0.len()).sum();
         let mut cols = Vec::with_capacity(total);
         let mut vals = Vec::with_capacity(total);
-        for (c, v) in rows {
+        for (lens, c, v) in parts {
+            for len in lens {
+                ptr.push(ptr.last().copied().unwrap_or(0) + len);
+            }
             cols.extend_from_slice(&c);
             vals.extend_from_slice(&v);
-            ptr.push(cols.len());
         }
         BlockCsr {
             ptr,
@@ -167,13 +181,16 @@ impl BlockCsr {
 
     /// Inverted diagonal blocks (identity where singular or missing).
     fn diagonal_inverse(&self) -> Vec<Block> {
-        (0..self.rows())
-            .map(|r| {
-                (self.ptr[r]..self.ptr[r + 1])
-                    .find(|&k| self.cols[k] as usize == r)
-                    .map_or(IDENTITY, |k| invert_or_identity(&self.vals[k]))
-            })
-            .collect()
+        let inverse = |r: usize| {
+            (self.ptr[r]..self.ptr[r + 1])
+                .find(|&k| self.cols[k] as usize == r)
+                .map_or(IDENTITY, |k| invert_or_identity(&self.vals[k]))
+        };
+        if self.rows() > PARALLEL_ROWS {
+            (0..self.rows()).into_par_iter().map(inverse).collect()
+        } else {
+            (0..self.rows()).map(inverse).collect()
+        }
     }
 }
 
