@@ -181,15 +181,22 @@ impl BlockCsr {
 
     /// Inverted diagonal blocks (identity where singular or missing).
     fn diagonal_inverse(&self) -> Vec<Block> {
-        let inverse = |r: usize| {
-            (self.ptr[r]..self.ptr[r + 1])
+        let mut d_inv = vec![IDENTITY; self.rows()];
+        self.diagonal_inverse_into(&mut d_inv);
+        d_inv
+    }
+
+    /// [`Self::diagonal_inverse`] into existing storage (one per row).
+    fn diagonal_inverse_into(&self, d_inv: &mut [Block]) {
+        let inverse = |(r, d): (usize, &mut Block)| {
+            *d = (self.ptr[r]..self.ptr[r + 1])
                 .find(|&k| self.cols[k] as usize == r)
-                .map_or(IDENTITY, |k| invert_or_identity(&self.vals[k]))
+                .map_or(IDENTITY, |k| invert_or_identity(&self.vals[k]));
         };
         if self.rows() > PARALLEL_ROWS {
-            (0..self.rows()).into_par_iter().map(inverse).collect()
+            d_inv.par_iter_mut().enumerate().for_each(inverse);
         } else {
-            (0..self.rows()).map(inverse).collect()
+            d_inv.iter_mut().enumerate().for_each(inverse);
         }
     }
 }
@@ -410,7 +417,8 @@ impl Amg {
         match self.levels.first_mut() {
             Some(level) => {
                 fill(&mut level.a.vals);
-                level.d_inv = level.a.diagonal_inverse();
+                // (In place: this runs every Newton iteration.)
+                level.a.diagonal_inverse_into(&mut level.d_inv);
                 true
             }
             None => {

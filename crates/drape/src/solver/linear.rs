@@ -21,7 +21,7 @@
 //! factors are written into storage that is reused from call to call.
 
 use super::amg::{Amg, BlockCsr};
-use super::block_lu::{BlockLu, gather_block};
+use super::block_lu::{Block, BlockLu, gather_block, invert, mul_vec};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::SupernodalThreshold;
@@ -151,25 +151,18 @@ fn distance(a: &[f64], b: &[f64]) -> f64 {
         .sqrt()
 }
 
-/// Inverse of a 3x3 matrix, `None` when (nearly) singular.
-fn invert3(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
-    let c = |r: usize, k: usize| {
-        let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
-        let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
-        m[r1][k1] * m[r2][k2] - m[r1][k2] * m[r2][k1]
-    };
-    let det = m[0][0] * c(0, 0) + m[0][1] * c(0, 1) + m[0][2] * c(0, 2);
-    let scale = m.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
-    if det.is_nan() || det.abs() <= 1e-14 * scale.powi(3) {
-        return None;
+/// `z = D^-1 r` for the inverted 3x3 diagonal blocks `blocks` (a trailing
+/// partial block, never met with 3 unknowns per node, acts on the entries
+/// there are).
+fn block_jacobi_apply(blocks: &[Block], r: &[f64], z: &mut [f64]) {
+    for (i, m) in blocks.iter().enumerate() {
+        let o = 3 * i;
+        let len = (r.len() - o).min(3);
+        let mut v = [0.0; 3];
+        v[..len].copy_from_slice(&r[o..o + len]);
+        let t = mul_vec(m, &v);
+        z[o..o + len].copy_from_slice(&t[..len]);
     }
-    let mut inv = [[0.0; 3]; 3];
-    for r in 0..3 {
-        for k in 0..3 {
-            inv[r][k] = c(k, r) / det;
-        }
-    }
-    Some(inv)
 }
 
 /// A linear solve that could not be done.
@@ -340,9 +333,9 @@ pub struct LinearSolver {
 }
 
 struct Krylov {
-    mg_in: Vec<f64>,
+    slice_in: Vec<f64>,
     symmetric_part: Vec<f64>,
-    blocks: Vec<[[f64; 3]; 3]>,
+    blocks: Vec<Block>,
     basis: Vec<Vec<f64>>,
     work: Mat<f64>,
     z: Vec<f64>,
@@ -354,7 +347,7 @@ struct Krylov {
 impl Default for Krylov {
     fn default() -> Self {
         Self {
-            mg_in: Vec::new(),
+            slice_in: Vec::new(),
             symmetric_part: Vec::new(),
             blocks: Vec::new(),
             basis: Vec::new(),
@@ -579,17 +572,20 @@ impl LinearSolver {
                 let fresh = mg.builds > builds;
                 self.blocks_current = true;
                 let ok = if symmetric {
-                    self.pcg(
+                    Ok(self.pcg(
                         values,
                         rhs,
                         Preconditioner::Multigrid,
                         tolerance,
                         MULTIGRID_ITERATIONS,
-                    )
+                    ))
                 } else {
-                    self.gmres(values, rhs, Preconditioner::Multigrid, MULTIGRID_ITERATIONS)?
+                    self.gmres(values, rhs, Preconditioner::Multigrid, MULTIGRID_ITERATIONS)
                 };
+                // (Reset before any early return: later products must read
+                // `values`, not the blocks.)
                 self.blocks_current = false;
+                let ok = ok?;
                 let iterations = self.last_krylov_iterations;
                 let mg = self.multigrid.as_mut().expect("checked above");
                 mg.record(if ok { iterations } else { usize::MAX });
@@ -609,26 +605,25 @@ impl LinearSolver {
         }
         if used.is_none() && mode == LinearMode::Iterative {
             let tolerance = self.krylov_tolerance;
-            if symmetric
-                && self.factor_block_jacobi(values)
-                && self.pcg(
+            if self.factor_block_jacobi(values) {
+                if symmetric
+                    && self.pcg(
+                        values,
+                        rhs,
+                        Preconditioner::BlockJacobi,
+                        tolerance,
+                        ITERATIVE_ITERATIONS,
+                    )
+                {
+                    used = Some(Factorization::BlockJacobiCg);
+                } else if self.gmres(
                     values,
                     rhs,
                     Preconditioner::BlockJacobi,
-                    tolerance,
                     ITERATIVE_ITERATIONS,
-                )
-            {
-                used = Some(Factorization::BlockJacobiCg);
-            } else if self.factor_block_jacobi(values)
-                && self.gmres(
-                    values,
-                    rhs,
-                    Preconditioner::BlockJacobi,
-                    ITERATIVE_ITERATIONS,
-                )?
-            {
-                used = Some(Factorization::BlockJacobiGmres);
+                )? {
+                    used = Some(Factorization::BlockJacobiGmres);
+                }
             }
         } else if used.is_none() {
             self.factor_kept = self.factor_symmetric_part(values, symmetric)?;
@@ -892,12 +887,12 @@ impl LinearSolver {
         let (col_ptr, row_idx) = (self.symbolic.col_ptr(), self.symbolic.row_idx());
         let mut blocks = std::mem::take(&mut self.krylov.blocks);
         blocks.clear();
-        blocks.resize(n.div_ceil(3), [[0.0; 3]; 3]);
+        blocks.resize(n.div_ceil(3), [0.0; 9]);
         for c in 0..n {
             for k in col_ptr[c]..col_ptr[c + 1] {
                 let r = row_idx[k];
                 if r / 3 == c / 3 {
-                    blocks[c / 3][r % 3][c % 3] = values[k];
+                    blocks[c / 3][3 * (r % 3) + c % 3] = values[k];
                 }
             }
         }
@@ -906,9 +901,9 @@ impl LinearSolver {
             // Trailing partial block (never for 3 unknowns per node): identity.
             let size = (n - 3 * i).min(3);
             for d in size..3 {
-                m[d][d] = 1.0;
+                m[4 * d] = 1.0;
             }
-            match invert3(*m) {
+            match invert(m) {
                 Some(inv) => *m = inv,
                 None => ok = false,
             }
@@ -917,7 +912,9 @@ impl LinearSolver {
         ok
     }
 
-    /// `z = P^-1 r` (block Jacobi or multigrid).
+    /// `z = P^-1 r` with the block-Jacobi blocks or a multigrid V-cycle
+    /// (the preconditioners of conjugate gradients; the Cholesky factor,
+    /// which works on faer matrices, goes through [`Self::precondition`]).
     fn precondition_slice(&mut self, kind: Preconditioner, r: &[f64], z: &mut [f64]) {
         match kind {
             Preconditioner::Multigrid => {
@@ -927,43 +924,26 @@ impl LinearSolver {
                     z.copy_from_slice(r);
                 }
             }
-            _ => {
-                for (i, m) in self.krylov.blocks.iter().enumerate() {
-                    let v = [r[3 * i], r[3 * i + 1], r[3 * i + 2]];
-                    for row in 0..3 {
-                        z[3 * i + row] = m[row][0] * v[0] + m[row][1] * v[1] + m[row][2] * v[2];
-                    }
-                }
+            Preconditioner::BlockJacobi => block_jacobi_apply(&self.krylov.blocks, r, z),
+            Preconditioner::Cholesky => {
+                let mut x = Mat::from_fn(r.len(), 1, |i, _| r[i]);
+                self.cholesky_solve(&mut x);
+                z.copy_from_slice(x.col_as_slice_mut(0));
             }
         }
     }
 
+    /// `x <- P^-1 x` (GMRES's preconditioner application).
     fn precondition(&mut self, kind: Preconditioner, x: &mut Mat<f64>) {
-        match kind {
-            Preconditioner::Cholesky => self.cholesky_solve(x),
-            Preconditioner::Multigrid => {
-                let mut r = std::mem::take(&mut self.krylov.mg_in);
-                r.clear();
-                r.extend_from_slice(x.col_as_slice_mut(0));
-                self.precondition_slice(kind, &r, x.col_as_slice_mut(0));
-                self.krylov.mg_in = r;
-            }
-            Preconditioner::BlockJacobi => {
-                let n = self.dimension();
-                for (i, m) in self.krylov.blocks.iter().enumerate() {
-                    let v: [f64; 3] = [0, 1, 2].map(|d| {
-                        if 3 * i + d < n {
-                            x[(3 * i + d, 0)]
-                        } else {
-                            0.0
-                        }
-                    });
-                    for r in 0..3.min(n - 3 * i) {
-                        x[(3 * i + r, 0)] = m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2];
-                    }
-                }
-            }
+        if kind == Preconditioner::Cholesky {
+            self.cholesky_solve(x);
+            return;
         }
+        let mut r = std::mem::take(&mut self.krylov.slice_in);
+        r.clear();
+        r.extend_from_slice(x.col_as_slice_mut(0));
+        self.precondition_slice(kind, &r, x.col_as_slice_mut(0));
+        self.krylov.slice_in = r;
     }
 
     /// Restarted GMRES (restart 25), right-preconditioned: solves `A P^-1 u
@@ -1129,7 +1109,7 @@ impl LinearSolver {
         let dot = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(a, c)| a * c).sum::<f64>();
         let mut converged = b_norm == 0.0;
         let mut iterations = 0;
-        if !converged && n.is_multiple_of(3) {
+        if !converged {
             self.precondition_slice(preconditioner, &r, &mut z);
             p.clear();
             p.extend_from_slice(&z);

@@ -17,9 +17,17 @@
 //! `|G|`, as it always does near a solution (so quadratic convergence is
 //! kept); otherwise it is halved, at most four times (a backtracking line
 //! search: contact makes `G` only piecewise smooth, and a full step can
-//! overshoot a node's entry into or exit from contact). NaN or infinite residuals, a residual that grows by `1e8`
-//! over the first one, and running out of iterations are errors that the
-//! time integrator answers by cutting the step.
+//! overshoot a node's entry into or exit from contact).
+//!
+//! After a full Newton step that shrank the increment at least fourfold,
+//! up to [`NewtonSettings::chord_steps`] chord steps reuse its
+//! factorisation (the function `chord_steps`); the convergence test is the same
+//! for either kind of increment.
+//!
+//! NaN or infinite residuals, a residual that grows by `1e8` over the
+//! first one, and running out of linear solves (Newton iterations and
+//! chord steps together) are errors that the time integrator answers by
+//! cutting the step.
 
 use super::linear::{Factorization, LinearSolveError, LinearSolver};
 
@@ -151,6 +159,15 @@ impl NewtonWorkspace {
     }
 }
 
+/// The convergence test of the module docs: the last increment applied
+/// (`INFINITY` before the first) and the residual both small, or the
+/// residual at round-off.
+fn converged(settings: &NewtonSettings, increment: f64, residual: f64, scale: f64) -> bool {
+    (increment <= settings.tolerance && residual <= settings.residual_tolerance * scale)
+        || residual <= 1e-13 * scale
+        || residual == 0.0
+}
+
 fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
@@ -182,11 +199,7 @@ pub fn solve(
         if !residual.is_finite() {
             return Err(NewtonError::NonFinite { iteration: it });
         }
-        let small = residual <= settings.residual_tolerance * eval.scale;
-        if (it > 0 && increment <= settings.tolerance && small)
-            || residual <= 1e-13 * eval.scale
-            || residual == 0.0
-        {
+        if converged(settings, increment, residual, eval.scale) {
             return Ok(report);
         }
         if residual > 1e8 * r0.max(scale0) && it > 0 {
@@ -209,9 +222,9 @@ pub fn solve(
             *d = -g;
         }
         // Inexact Newton (Eisenstat & Walker 1996): Krylov solves need only
-        // reduce their residual as far as Newton's is from zero, so the
-        // tolerance follows |G| (keeping quadratic convergence) and is
-        // 1e-12 near the solution.
+        // reduce their residual as far as Newton's has fallen since the
+        // step's first iterate, so the tolerance is |G| / |G_0| (keeping
+        // quadratic convergence), between 1e-4 and 1e-12.
         ws.linear.krylov_tolerance = (residual / r0.max(f64::MIN_POSITIVE)).clamp(1e-12, 1e-4);
         report.factorization = Some(ws.linear.solve(&ws.h, eval.symmetric, &mut ws.dy)?);
         system.transform_increment(&mut ws.dy);
@@ -290,10 +303,7 @@ fn chord_steps(
     increment: &mut f64,
 ) {
     for _ in 0..settings.chord_steps {
-        let converged = *increment <= settings.tolerance
-            && *residual <= settings.residual_tolerance * eval.scale;
-        if converged
-            || *residual <= 1e-13 * eval.scale
+        if converged(settings, *increment, *residual, eval.scale)
             || report.iterations + report.chord_steps >= settings.max_iterations
         {
             return;
