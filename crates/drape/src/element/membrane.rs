@@ -31,6 +31,7 @@ pub struct Section {
 #[allow(non_snake_case)]
 #[inline]
 pub fn deformation_gradient(y: &[[f64; 3]], grad: &[[f64; 2]]) -> [[f64; 2]; 3] {
+    // (Called with fixed-size arrays from the kernel, so the loop unrolls.)
     let mut F = [[0.0; 2]; 3];
     for (ya, ga) in y.iter().zip(grad) {
         for i in 0..3 {
@@ -76,7 +77,10 @@ pub fn element_energy(
 /// Strain energy (returned), internal force `f` (length `3n`, `f[3a + i]`)
 /// and, if given, the Hessian `k` (`3n x 3n`, row-major, `k[(3a + i) 3n +
 /// 3b + j]`) of one element. `f` and `k` are overwritten.
-#[allow(non_snake_case)]
+///
+/// Without `k` only the stress is asked of the material
+/// ([`Material::energy_stress`]): force-only evaluations (Newton's line
+/// search and chord steps) skip the tangent.
 pub fn element_force_hessian(
     material: &dyn Material,
     section: Section,
@@ -84,75 +88,125 @@ pub fn element_force_hessian(
     grad: &[[f64; 2]],
     weight: &[f64],
     f: &mut [f64],
-    mut k: Option<&mut [f64]>,
+    k: Option<&mut [f64]>,
 ) -> f64 {
-    let n = y.len();
-    let m = 3 * n;
-    f[..m].fill(0.0);
-    if let Some(k) = k.as_deref_mut() {
-        k[..m * m].fill(0.0);
+    // One instance per element order: with the node count known at compile
+    // time the loops over nodes unroll (a T3 force and Hessian is then a
+    // few hundred straight-line instructions).
+    match y.len() {
+        3 => force_hessian::<3>(material, section, y, grad, weight, f, k),
+        6 => force_hessian::<6>(material, section, y, grad, weight, f, k),
+        // Orders are 1 to 3 by construction of `Mesh`: 3, 6 or 10 nodes.
+        _ => force_hessian::<10>(material, section, y, grad, weight, f, k),
     }
+}
+
+/// [`element_force_hessian`] for `N` nodes.
+#[allow(non_snake_case)]
+#[inline]
+fn force_hessian<const N: usize>(
+    material: &dyn Material,
+    section: Section,
+    y: &[[f64; 3]],
+    grad: &[[f64; 2]],
+    weight: &[f64],
+    f: &mut [f64],
+    k: Option<&mut [f64]>,
+) -> f64 {
+    let y: &[[f64; 3]; N] = y.try_into().expect("N nodes");
+    let f: &mut [f64] = &mut f[..3 * N];
+    f.fill(0.0);
     let t = section.thickness;
     let mut energy = 0.0;
-    // B[a][i] = d e / d Y^a_i, and DB[a][i] = D B[a][i].
-    let mut B = [[[0.0; 3]; 3]; super::lagrange::MAX_NODES];
-    let mut DB = [[[0.0; 3]; 3]; super::lagrange::MAX_NODES];
+    // K[a][i][b][j] = k[(3a + i) 3N + 3b + j]: the same row-major layout,
+    // with sizes the compiler knows (no bounds checks in the products).
+    let mut K = [[[[0.0; 3]; N]; 3]; N];
     for (q, w) in weight.iter().enumerate() {
-        let g = &grad[q * n..(q + 1) * n];
+        let g: &[[f64; 2]; N] = grad[q * N..(q + 1) * N].try_into().expect("N gradients");
         let F = deformation_gradient(y, g);
         let e = green_lagrange(&F);
+        let tw = t * w;
+        if k.is_none() {
+            let (u, s) = material.energy_stress(e);
+            let S = [s[0] + section.prestress, s[1] + section.prestress, s[2]];
+            energy += tw * (u + section.prestress * (e[0] + e[1]));
+            add_force(&F, S, g, tw, f);
+            continue;
+        }
         let r = material.evaluate(e);
         let S = [
             r.stress[0] + section.prestress,
             r.stress[1] + section.prestress,
             r.stress[2],
         ];
-        energy += t * w * (r.energy + section.prestress * (e[0] + e[1]));
-        let tw = t * w;
-        for a in 0..n {
-            let ga = g[a];
-            // (F S) grad phi^a with S = [[S0, S2], [S2, S1]].
-            let sg = [S[0] * ga[0] + S[2] * ga[1], S[2] * ga[0] + S[1] * ga[1]];
-            for i in 0..3 {
-                f[3 * a + i] += tw * (F[i][0] * sg[0] + F[i][1] * sg[1]);
-            }
-        }
-        let Some(k) = k.as_deref_mut() else { continue };
+        energy += tw * (r.energy + section.prestress * (e[0] + e[1]));
+        add_force(&F, S, g, tw, f);
         let D = r.tangent;
-        for a in 0..n {
+        // B[a][i] = d e / d Y^a_i, and DB[a][i] = tw D B[a][i].
+        let B: [[[f64; 3]; 3]; N] = std::array::from_fn(|a| {
             let ga = g[a];
-            for i in 0..3 {
-                let b = [
+            std::array::from_fn(|i| {
+                [
                     ga[0] * F[i][0],
                     ga[1] * F[i][1],
                     ga[0] * F[i][1] + ga[1] * F[i][0],
-                ];
-                B[a][i] = b;
-                for r in 0..3 {
-                    DB[a][i][r] = D[r][0] * b[0] + D[r][1] * b[1] + D[r][2] * b[2];
-                }
-            }
-        }
-        for a in 0..n {
+                ]
+            })
+        });
+        let DB: [[[f64; 3]; 3]; N] = std::array::from_fn(|a| {
+            std::array::from_fn(|i| {
+                let b = B[a][i];
+                std::array::from_fn(|r| tw * (D[r][0] * b[0] + D[r][1] * b[1] + D[r][2] * b[2]))
+            })
+        });
+        for a in 0..N {
             let ga = g[a];
-            for b in 0..n {
-                let gb = g[b];
-                let geo = tw
-                    * (ga[0] * (S[0] * gb[0] + S[2] * gb[1])
-                        + ga[1] * (S[2] * gb[0] + S[1] * gb[1]));
-                for i in 0..3 {
-                    let row = (3 * a + i) * m + 3 * b;
-                    let bai = B[a][i];
+            // tw S grad phi^a, for the geometric term.
+            let sa = [
+                tw * (S[0] * ga[0] + S[2] * ga[1]),
+                tw * (S[2] * ga[0] + S[1] * ga[1]),
+            ];
+            for i in 0..3 {
+                let bai = B[a][i];
+                let row = &mut K[a][i];
+                for b in 0..N {
+                    let gb = g[b];
                     for j in 0..3 {
                         let dbj = DB[b][j];
-                        k[row + j] += tw * (bai[0] * dbj[0] + bai[1] * dbj[1] + bai[2] * dbj[2]);
+                        row[b][j] += bai[0] * dbj[0] + bai[1] * dbj[1] + bai[2] * dbj[2];
                     }
-                    k[row + i] += geo;
+                    row[b][i] += sa[0] * gb[0] + sa[1] * gb[1];
                 }
             }
         }
     }
+    if let Some(k) = k {
+        k[..9 * N * N].copy_from_slice(K.as_flattened().as_flattened().as_flattened());
+    }
     energy
+}
+
+/// `f^a += tw F S grad phi^a` for every node `a`.
+#[allow(non_snake_case)]
+#[inline]
+fn add_force<const N: usize>(
+    F: &[[f64; 2]; 3],
+    S: [f64; 3],
+    g: &[[f64; 2]; N],
+    tw: f64,
+    f: &mut [f64],
+) {
+    for a in 0..N {
+        let ga = g[a];
+        // (F S) grad phi^a with S = [[S0, S2], [S2, S1]].
+        let sg = [
+            tw * (S[0] * ga[0] + S[2] * ga[1]),
+            tw * (S[2] * ga[0] + S[1] * ga[1]),
+        ];
+        for i in 0..3 {
+            f[3 * a + i] += F[i][0] * sg[0] + F[i][1] * sg[1];
+        }
+    }
 }
 
 /// Mean second Piola–Kirchhoff stress `[S11, S22, S12]` over the element's

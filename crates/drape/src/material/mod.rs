@@ -40,6 +40,13 @@ pub trait Material: Send + Sync + std::fmt::Debug {
             tangent: self.tangent(strain),
         }
     }
+    /// Energy and stress without the tangent: what a force-only
+    /// evaluation (Newton's line search, chord steps) needs. Override when
+    /// the tangent costs more than the stress (the wrinkling models).
+    fn energy_stress(&self, strain: [f64; 3]) -> (f64, [f64; 3]) {
+        let r = self.evaluate(strain);
+        (r.energy, r.stress)
+    }
     /// Whether [`Material::tangent`] is always symmetric (then the Hessian
     /// is symmetric and Cholesky applies).
     fn has_symmetric_tangent(&self) -> bool {

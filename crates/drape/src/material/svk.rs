@@ -56,6 +56,11 @@ impl Material for SaintVenantKirchhoff {
         self.c
     }
 
+    fn energy_stress(&self, e: [f64; 3]) -> (f64, [f64; 3]) {
+        let s = self.stress(e);
+        (0.5 * (s[0] * e[0] + s[1] * e[1] + s[2] * e[2]), s)
+    }
+
     fn evaluate(&self, e: [f64; 3]) -> MaterialResponse {
         let s = self.stress(e);
         MaterialResponse {

@@ -193,17 +193,113 @@ impl Wrinkling {
     }
 }
 
+impl Wrinkling {
+    /// Energy, stress and (with `TANGENT`) the tangent at strain `e`; the
+    /// principal decomposition that decides the state is computed once and
+    /// serves the response too.
+    fn respond<const TANGENT: bool>(&self, e: [f64; 3]) -> MaterialResponse {
+        let c = self.elastic.matrix();
+        let slack = || MaterialResponse {
+            energy: 0.0,
+            stress: [0.0; 3],
+            tangent: if TANGENT {
+                self.slack_response(e).tangent
+            } else {
+                [[0.0; 3]; 3]
+            },
+        };
+        match self.model {
+            WrinklingModel::StressProjection => {
+                let s = self.elastic_stress(e);
+                let (s1, s2, n1) = eigen(s[0], s[1], s[2]);
+                if s2 >= 0.0 {
+                    // Taut.
+                    let w = self.elastic.energy(e) + self.prestress * (e[0] + e[1]);
+                    return MaterialResponse {
+                        energy: w,
+                        stress: s,
+                        tangent: c,
+                    };
+                }
+                if s1 <= 0.0 {
+                    return slack();
+                }
+                // Wrinkled.
+                let stress = scale_in_basis(s, n1, 1.0, 0.0, 0.0);
+                let mut tangent = [[0.0; 3]; 3];
+                if TANGENT {
+                    let k = s1 / (s1 - s2);
+                    // D = dP/dS . C, column by column.
+                    for col in 0..3 {
+                        let ds = [c[0][col], c[1][col], c[2][col]];
+                        let dp = scale_in_basis(ds, n1, 1.0, 0.0, k);
+                        for row in 0..3 {
+                            tangent[row][col] = dp[row];
+                        }
+                    }
+                }
+                // Reported energy: 1/2 P : E (the model has no energy).
+                let energy = 0.5 * (stress[0] * e[0] + stress[1] * e[1] + stress[2] * e[2]);
+                MaterialResponse {
+                    energy,
+                    stress,
+                    tangent,
+                }
+            }
+            WrinklingModel::RelaxedEnergy => {
+                let (e1, e2, n1) = eigen(e[0], e[1], 0.5 * e[2]);
+                if e1 <= 0.0 {
+                    return slack();
+                }
+                if e2 > -self.nu * e1 {
+                    return self.elastic.evaluate(e);
+                }
+                // Wrinkled.
+                let y = self.young;
+                let stress = [
+                    y * e1 * n1[0] * n1[0],
+                    y * e1 * n1[1] * n1[1],
+                    y * e1 * n1[0] * n1[1],
+                ];
+                let mut tangent = [[0.0; 3]; 3];
+                if TANGENT {
+                    let k = y * e1 / (e1 - e2);
+                    for col in 0..3 {
+                        // Unit engineering strain component -> tensor strain (Voigt stress form).
+                        let mut de = [0.0; 3];
+                        de[col] = if col == 2 { 0.5 } else { 1.0 };
+                        let ds = scale_in_basis(de, n1, y, 0.0, k);
+                        for row in 0..3 {
+                            tangent[row][col] = ds[row];
+                        }
+                    }
+                }
+                MaterialResponse {
+                    energy: 0.5 * y * e1 * e1,
+                    stress,
+                    tangent,
+                }
+            }
+        }
+    }
+}
+
 impl Material for Wrinkling {
     fn energy(&self, e: [f64; 3]) -> f64 {
-        self.evaluate(e).energy
+        self.respond::<false>(e).energy
     }
 
     fn stress(&self, e: [f64; 3]) -> [f64; 3] {
-        self.evaluate(e).stress
+        self.respond::<false>(e).stress
     }
 
     fn tangent(&self, e: [f64; 3]) -> [[f64; 3]; 3] {
-        self.evaluate(e).tangent
+        self.respond::<true>(e).tangent
+    }
+
+    fn energy_stress(&self, e: [f64; 3]) -> (f64, [f64; 3]) {
+        let r = self.respond::<false>(e);
+        (r.energy, r.stress)
     }
 
     fn has_symmetric_tangent(&self) -> bool {
@@ -215,67 +311,7 @@ impl Material for Wrinkling {
     }
 
     fn evaluate(&self, e: [f64; 3]) -> MaterialResponse {
-        let c = self.elastic.matrix();
-        match (self.model, self.state_of(e)) {
-            (_, WrinkleState::Slack) => self.slack_response(e),
-            (WrinklingModel::StressProjection, WrinkleState::Taut) => {
-                let s = self.elastic_stress(e);
-                let w = self.elastic.energy(e) + self.prestress * (e[0] + e[1]);
-                MaterialResponse {
-                    energy: w,
-                    stress: s,
-                    tangent: c,
-                }
-            }
-            (WrinklingModel::RelaxedEnergy, WrinkleState::Taut) => self.elastic.evaluate(e),
-            (WrinklingModel::StressProjection, WrinkleState::Wrinkled) => {
-                let s = self.elastic_stress(e);
-                let (s1, s2, n1) = eigen(s[0], s[1], s[2]);
-                let stress = scale_in_basis(s, n1, 1.0, 0.0, 0.0);
-                let k = s1 / (s1 - s2);
-                // D = dP/dS . C, column by column.
-                let mut tangent = [[0.0; 3]; 3];
-                for col in 0..3 {
-                    let ds = [c[0][col], c[1][col], c[2][col]];
-                    let dp = scale_in_basis(ds, n1, 1.0, 0.0, k);
-                    for row in 0..3 {
-                        tangent[row][col] = dp[row];
-                    }
-                }
-                // Reported energy: 1/2 P : E (the model has no energy).
-                let energy = 0.5 * (stress[0] * e[0] + stress[1] * e[1] + stress[2] * e[2]);
-                MaterialResponse {
-                    energy,
-                    stress,
-                    tangent,
-                }
-            }
-            (WrinklingModel::RelaxedEnergy, WrinkleState::Wrinkled) => {
-                let (e1, e2, n1) = eigen(e[0], e[1], 0.5 * e[2]);
-                let y = self.young;
-                let stress = [
-                    y * e1 * n1[0] * n1[0],
-                    y * e1 * n1[1] * n1[1],
-                    y * e1 * n1[0] * n1[1],
-                ];
-                let k = y * e1 / (e1 - e2);
-                let mut tangent = [[0.0; 3]; 3];
-                for col in 0..3 {
-                    // Unit engineering strain component -> tensor strain (Voigt stress form).
-                    let mut de = [0.0; 3];
-                    de[col] = if col == 2 { 0.5 } else { 1.0 };
-                    let ds = scale_in_basis(de, n1, y, 0.0, k);
-                    for row in 0..3 {
-                        tangent[row][col] = ds[row];
-                    }
-                }
-                MaterialResponse {
-                    energy: 0.5 * y * e1 * e1,
-                    stress,
-                    tangent,
-                }
-            }
-        }
+        self.respond::<true>(e)
     }
 }
 

@@ -169,14 +169,12 @@ impl Model {
                             let blocks = &self.element_blocks[e * n * n..(e + 1) * n * n];
                             for a in 0..n {
                                 for (b, &node_b) in el.iter().enumerate() {
-                                    let p = blocks[a * n + b];
+                                    let (base, stride) =
+                                        self.pattern.block_layout(blocks[a * n + b], node_b);
                                     for i in 0..3 {
                                         let row = (3 * a + i) * m + 3 * b;
                                         for j in 0..3 {
-                                            h_ptr.add(
-                                                self.pattern.entry(p, node_b, i, j),
-                                                local.k[row + j],
-                                            );
+                                            h_ptr.add(base + j * stride + i, local.k[row + j]);
                                         }
                                     }
                                 }

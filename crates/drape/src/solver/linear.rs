@@ -846,11 +846,12 @@ impl LinearSolver {
             return;
         }
         out.fill(0.0);
-        for c in 0..self.dimension() {
-            let xc = x[c];
+        for (c, &xc) in x.iter().enumerate().take(self.dimension()) {
             if xc != 0.0 {
-                for k in col_ptr[c]..col_ptr[c + 1] {
-                    out[row_idx[k]] += values[k] * xc;
+                let range = col_ptr[c]..col_ptr[c + 1];
+                // Zipped slices: one bounds check per column, not per entry.
+                for (&r, &v) in row_idx[range.clone()].iter().zip(&values[range]) {
+                    out[r] += v * xc;
                 }
             }
         }

@@ -233,12 +233,25 @@ pub fn solve(
         // the residual is only piecewise smooth (contact entering and
         // leaving) and a full step overshoots.
         ws.y_old.copy_from_slice(y);
+        let previous = increment;
+        let full_increment = norm(&ws.dy) / length;
+        let chord_ahead = settings.chord_steps > 0 && full_increment <= 0.25 * previous;
+        // A full step whose increment is above the tolerance cannot end
+        // the iteration: the next iteration needs the Hessian at the trial
+        // point, so it is assembled with the trial's residual (one element
+        // loop instead of two). Not when chord steps will be tried first:
+        // they reuse the factorisation just made.
+        let mut hessian_at_trial = full_increment > settings.tolerance && !chord_ahead;
         let mut alpha = 1.0;
         loop {
             for ((yi, y0), d) in y.iter_mut().zip(&ws.y_old).zip(&ws.dy) {
                 *yi = y0 + alpha * d;
             }
-            eval = system.evaluate(y, &mut ws.g, None);
+            eval = if hessian_at_trial {
+                system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]))
+            } else {
+                system.evaluate(y, &mut ws.g, None)
+            };
             let trial = eval.merit.unwrap_or_else(|| norm(&ws.g));
             if (trial.is_finite() && trial <= (1.0 - 1e-4 * alpha) * residual)
                 || alpha <= 1.0 / 16.0
@@ -247,10 +260,11 @@ pub fn solve(
                 break;
             }
             alpha *= 0.5;
+            // (A shortened step is accepted with a residual only.)
+            hessian_at_trial = false;
         }
-        have_hessian = false;
+        have_hessian = hessian_at_trial;
         report.residuals.push(residual);
-        let previous = increment;
         increment = alpha * norm(&ws.dy) / length;
         report.increments.push(increment);
         report.iterations += 1;

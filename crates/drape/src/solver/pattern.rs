@@ -133,9 +133,18 @@ impl SparsePattern {
     /// `p` of `a` in column `b`.
     #[inline]
     pub fn entry(&self, p: usize, b: usize, i: usize, j: usize) -> usize {
+        let (base, stride) = self.block_layout(p, b);
+        base + j * stride + i
+    }
+
+    /// Where the 3x3 block at node-graph position `p` of column `b` lies
+    /// in the values: entry `(i, j)` of the block is at `base + j stride +
+    /// i` (the layout of [`SparsePattern::entry`], computed once per block).
+    #[inline]
+    pub fn block_layout(&self, p: usize, b: usize) -> (usize, usize) {
         let start = self.node_ptr[b];
         let degree = self.node_ptr[b + 1] - start;
-        9 * start + 3 * j * degree + 3 * (p - start) + i
+        (9 * start + 3 * (p - start), 3 * degree)
     }
 
     /// Node-graph CSC: `(ptr, rows)`.
