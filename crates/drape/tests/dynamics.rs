@@ -192,15 +192,24 @@ at = [0.1, 0.1, 0.0]
 every = 1000
 "#;
 
-/// Hanging cloth (the example): trapezoidal rule over the first 0.25 s
+/// Hanging cloth (the example): trapezoidal rule over the first 0.2 s
 /// keeps the total energy `K + U - W` within 1 % of the work done by the
 /// weight (the trapezoidal rule conserves energy exactly only for linear
 /// problems; for this geometrically nonlinear one the error is O(dt^2)),
-/// while `beta = 1, gamma = 1.5` dissipates it at every step.
+/// while `beta = 1, gamma = 1.5` dissipates it at every step (0.25 s).
+///
+/// Why the undamped run stops at 0.2 s (SPEC §5: "over the part of the
+/// swing that stays clear of compression past stretch 1/sqrt(3)"): the
+/// trapezoidal rule keeps the high frequencies that the swing excites, and
+/// from about 0.2 s Newton needs 10 to 26 iterations per step and the path
+/// depends on round-off — two builds that differ only in the order in
+/// which element forces are summed agree to 4e-7 in kinetic energy at
+/// 0.2 s, to 1e-4 at 0.21 s, and then one of them drives an element past
+/// SVK's compressive instability at 0.235 s, the other at about 0.30 s.
 #[test]
 fn hanging_cloth_energy_trapezoidal_conserves_damped_decays() {
     let pins = PINNED_UNDER_WEIGHT;
-    for (beta, gamma, steps) in [(0.25, 0.5, 250), (1.0, 1.5, 250)] {
+    for (beta, gamma, steps) in [(0.25, 0.5, 200), (1.0, 1.5, 250)] {
         let text = fabric(&format!(
             "{pins}\n[time]\nbeta = {beta}\ngamma = {gamma}\nsegments = [{{ steps = {steps}, dt = 1.0e-3 }}]\n"
         ));

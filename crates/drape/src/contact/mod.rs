@@ -296,3 +296,74 @@ impl ContactModel {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::obstacle::{BoxObstacle, Rounded, SphereObstacle};
+
+    /// The enforcement's search (negative gaps only, nodes outside a
+    /// bounding box skipped) finds exactly the pairs that querying every
+    /// node finds, also for nodes within the touching band of a face with a
+    /// hint, above edges and corners, and for a moving obstacle.
+    #[test]
+    fn skipping_nodes_outside_the_bounding_box_loses_no_contact() {
+        let (lo, hi) = ([-0.05, -0.05, -0.25], [0.05, 0.05, -0.05]);
+        let sharp = BoxObstacle::new(lo, hi).expect("a box");
+        let inner = BoxObstacle::new(lo.map(|v| v + 1e-4), hi.map(|v| v - 1e-4)).expect("a box");
+        let model = ContactModel {
+            bodies: vec![
+                RigidBody {
+                    shape: Box::new(sharp),
+                    velocity: [0.0; 3],
+                },
+                RigidBody {
+                    shape: Box::new(Rounded::new(inner, 1e-4)),
+                    velocity: [0.0, 0.0, -0.2],
+                },
+                RigidBody {
+                    shape: Box::new(SphereObstacle::new([0.2, 0.0, -0.1], 0.05).expect("a sphere")),
+                    velocity: [0.1, 0.0, 0.0],
+                },
+            ],
+            method: ContactMethod::Penalty { stiffness: 1e4 },
+        };
+        // Points on a lattice through the boxes' faces, edges and corners,
+        // each also nudged by +-1e-12 m (inside the touching band) and
+        // +-1e-3 m.
+        let marks = [-0.06, -0.05, -0.02, 0.0, 0.05, 0.06, 0.15, 0.2, 0.25];
+        let heights = [-0.3, -0.25, -0.1, -0.05, -0.04, 0.0];
+        let nudges = [0.0, 1e-12, -1e-12, 1e-3, -1e-3];
+        let mut y = Vec::new();
+        for &x in &marks {
+            for &yy in &marks {
+                for &z in &heights {
+                    for &d in &nudges {
+                        y.extend_from_slice(&[x + d, yy - d, z + d]);
+                    }
+                }
+            }
+        }
+        let t = 0.01;
+        // Hints from a state a little above (nodes coming down through the
+        // top face), as the run loop keeps them.
+        let above: Vec<f64> = y
+            .chunks(3)
+            .flat_map(|p| [p[0], p[1], p[2] + 0.02])
+            .collect();
+        let state = model.initial_state(&above);
+        let (all, _) = model.near_pairs(&y, t, &state, 0.0, true);
+        let (skipped, _) = model.near_pairs(&y, t, &state, 0.0, false);
+        let key = |v: &[(usize, usize, Proximity)]| -> Vec<(usize, usize, u64)> {
+            v.iter()
+                .map(|(p, k, prox)| (*p, *k, prox.gap.to_bits()))
+                .collect()
+        };
+        assert_eq!(key(&all), key(&skipped));
+        assert!(
+            all.len() > 100,
+            "the lattice meets the obstacles: {}",
+            all.len()
+        );
+    }
+}

@@ -119,88 +119,89 @@ impl Model {
         let fi = Shared(f_int.as_mut_ptr());
         let fe = Shared(f_ext.as_mut_ptr());
         let material = self.material.as_ref();
-        let mut energy = 0.0;
-        for colour in &self.colours {
-            // Fixed chunks, their partial energies summed in order: the
-            // result does not depend on how rayon schedules the work
-            // (resumed runs reproduce uninterrupted ones to the bit).
-            let work = |local: &mut Local, chunk: &[usize]| -> f64 {
-                let mut sum = 0.0;
-                for &e in chunk {
-                    let el = self.mesh.element(e);
-                    for (a, &node) in el.iter().enumerate() {
-                        local.y[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
-                    }
-                    let (grad, weight) = self.geometry.element(e);
+        // Elements are summed in fixed groups and chunks, their partial
+        // energies in order: the result depends neither on how rayon
+        // schedules the work nor on the number of threads (resumed runs
+        // reproduce uninterrupted ones to the bit).
+        let work = |local: &mut Local, chunk: &[usize]| -> f64 {
+            let mut sum = 0.0;
+            for &e in chunk {
+                let el = self.mesh.element(e);
+                for (a, &node) in el.iter().enumerate() {
+                    local.y[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
+                }
+                let (grad, weight) = self.geometry.element(e);
+                let k = want_h.then_some(&mut local.k[..m * m]);
+                let u = element_force_hessian(
+                    material,
+                    self.section,
+                    &local.y[..n],
+                    grad,
+                    weight,
+                    &mut local.f[..m],
+                    k,
+                );
+                if pressure != 0.0 {
+                    local.fp[..m].fill(0.0);
                     let k = want_h.then_some(&mut local.k[..m * m]);
-                    let u = element_force_hessian(
-                        material,
-                        self.section,
+                    add_pressure_force(
+                        pressure,
                         &local.y[..n],
-                        grad,
-                        weight,
-                        &mut local.f[..m],
+                        &self.pressure_quadrature,
+                        &mut local.fp[..m],
                         k,
+                        -1.0,
                     );
-                    if pressure != 0.0 {
-                        local.fp[..m].fill(0.0);
-                        let k = want_h.then_some(&mut local.k[..m * m]);
-                        add_pressure_force(
-                            pressure,
-                            &local.y[..n],
-                            &self.pressure_quadrature,
-                            &mut local.fp[..m],
-                            k,
-                            -1.0,
-                        );
-                    }
-                    // SAFETY: the elements of one colour share no node, so
-                    // the entries written below are disjoint across threads.
-                    unsafe {
-                        for (a, &node) in el.iter().enumerate() {
-                            for i in 0..3 {
-                                fi.add(3 * node + i, local.f[3 * a + i]);
-                                if pressure != 0.0 {
-                                    fe.add(3 * node + i, local.fp[3 * a + i]);
-                                }
+                }
+                // SAFETY: the elements of one colour (or of the two halves)
+                // share no node, so the entries written below are disjoint
+                // across threads.
+                unsafe {
+                    for (a, &node) in el.iter().enumerate() {
+                        for i in 0..3 {
+                            fi.add(3 * node + i, local.f[3 * a + i]);
+                            if pressure != 0.0 {
+                                fe.add(3 * node + i, local.fp[3 * a + i]);
                             }
                         }
-                        if want_h {
-                            let blocks = &self.element_blocks[e * n * n..(e + 1) * n * n];
-                            for a in 0..n {
-                                for (b, &node_b) in el.iter().enumerate() {
-                                    let (base, stride) =
-                                        self.pattern.block_layout(blocks[a * n + b], node_b);
-                                    for i in 0..3 {
-                                        let row = (3 * a + i) * m + 3 * b;
-                                        for j in 0..3 {
-                                            h_ptr.add(base + j * stride + i, local.k[row + j]);
-                                        }
+                    }
+                    if want_h {
+                        let blocks = &self.element_blocks[e * n * n..(e + 1) * n * n];
+                        for a in 0..n {
+                            for (b, &node_b) in el.iter().enumerate() {
+                                let (base, stride) =
+                                    self.pattern.block_layout(blocks[a * n + b], node_b);
+                                for i in 0..3 {
+                                    let row = (3 * a + i) * m + 3 * b;
+                                    for j in 0..3 {
+                                        h_ptr.add(base + j * stride + i, local.k[row + j]);
                                     }
                                 }
                             }
                         }
                     }
-                    sum += u;
                 }
-                sum
-            };
-            // Small meshes: threads cost more than they save (a colour of
-            // a 20x20 fabric is ~120 elements, ~25 us of work).
-            energy += if !self.parallel() {
-                let mut local = Local::new();
-                colour
-                    .chunks(CHUNK)
-                    .map(|chunk| work(&mut local, chunk))
-                    .sum::<f64>()
-            } else {
-                colour
-                    .par_chunks(CHUNK)
-                    .map_init(Local::new, work)
-                    .collect::<Vec<f64>>()
-                    .iter()
-                    .sum::<f64>()
-            };
+                sum += u;
+            }
+            sum
+        };
+        if let Some([left, right, interface]) = &self.halves {
+            // Small meshes: the two halves at once, then their interface
+            // (one fork, no per-colour hand-offs).
+            let (a, b) = rayon::join(
+                || work(&mut Local::new(), left),
+                || work(&mut Local::new(), right),
+            );
+            return a + b + work(&mut Local::new(), interface);
+        }
+        let mut energy = 0.0;
+        for colour in &self.colours {
+            energy += colour
+                .par_chunks(CHUNK)
+                .map_init(Local::new, work)
+                .collect::<Vec<f64>>()
+                .iter()
+                .sum::<f64>();
         }
         energy
     }

@@ -19,6 +19,12 @@
 //! search: contact makes `G` only piecewise smooth, and a full step can
 //! overshoot a node's entry into or exit from contact).
 //!
+//! When a full step's increment is above the tolerance (so the iteration
+//! cannot end there) and no chord step will follow, the trial point's
+//! residual is evaluated together with its Hessian, which the next
+//! iteration then uses: one element loop per Newton iteration instead of
+//! two. A trial the line search shortens is evaluated for its residual only.
+//!
 //! After a full Newton step that shrank the increment at least fourfold,
 //! up to [`NewtonSettings::chord_steps`] chord steps reuse its
 //! factorisation (the function `chord_steps`); the convergence test is the same
