@@ -143,22 +143,22 @@ fn force_hessian<const N: usize>(
         add_force(&F, S, g, tw, f);
         let D = r.tangent;
         // B[a][i] = d e / d Y^a_i, and DB[a][i] = tw D B[a][i].
-        let B: [[[f64; 3]; 3]; N] = std::array::from_fn(|a| {
+        let mut B = [[[0.0; 3]; 3]; N];
+        let mut DB = [[[0.0; 3]; 3]; N];
+        for a in 0..N {
             let ga = g[a];
-            std::array::from_fn(|i| {
-                [
+            for i in 0..3 {
+                let b = [
                     ga[0] * F[i][0],
                     ga[1] * F[i][1],
                     ga[0] * F[i][1] + ga[1] * F[i][0],
-                ]
-            })
-        });
-        let DB: [[[f64; 3]; 3]; N] = std::array::from_fn(|a| {
-            std::array::from_fn(|i| {
-                let b = B[a][i];
-                std::array::from_fn(|r| tw * (D[r][0] * b[0] + D[r][1] * b[1] + D[r][2] * b[2]))
-            })
-        });
+                ];
+                B[a][i] = b;
+                for r in 0..3 {
+                    DB[a][i][r] = tw * (D[r][0] * b[0] + D[r][1] * b[1] + D[r][2] * b[2]);
+                }
+            }
+        }
         for a in 0..N {
             let ga = g[a];
             // tw S grad phi^a, for the geometric term.
