@@ -17,8 +17,12 @@
 //! the same directory and then renamed over its final name
 //! ([`atomic`]). A frame is written before it is added to `fields.pvd`, so
 //! the collection only lists complete frames.
+//!
+//! [`background::Background`] runs such writes on a thread of their own,
+//! in order, so that a run loop need not wait for the disk.
 
 pub mod atomic;
+pub mod background;
 pub mod history;
 pub mod pvd;
 pub mod vtu;

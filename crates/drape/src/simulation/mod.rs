@@ -7,20 +7,28 @@
 //! original size again. When even the smallest step fails, the run stops:
 //! the last converged state is written as a field frame, the history holds
 //! every converged step, and `summary.json` says `"failed"` and why.
+//!
+//! The history rows are written and flushed by the loop itself, one per
+//! step. The field frames are handed to a writer thread (`frames.rs`)
+//! that writes them in order while the loop goes on; the loop waits for it
+//! before a checkpoint (which records the frames as written) and before
+//! the summary, so that whatever a run ends with, everything it computed
+//! is on disk when `summary.json` says so.
 
 use crate::contact::ContactReport;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 mod checkpoint;
+mod frames;
 use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
 use crate::integrator::{State, StaticStepper};
 use crate::output::atomic::write_atomic;
 use crate::output::history::HistoryWriter;
 use crate::output::pvd::{PvdWriter, frame_relative_path};
-use crate::output::vtu::{DataArray, Frame, Values, write_vtu};
 use crate::scenario::{Analysis, Setup};
 use crate::solver::NewtonError;
 pub use checkpoint::{Checkpoint, CheckpointError, Counters};
+use frames::Snapshot;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -85,10 +93,19 @@ pub struct Summary {
     /// session, for a resumed run). `wall_seconds - setup_seconds` is the
     /// time of the steps.
     pub setup_seconds: f64,
-    /// Of which: writing the history rows and field frames after the set-up
-    /// (s). `wall_seconds - setup_seconds - output_seconds` is the time of
-    /// the mechanics and the solvers.
+    /// Of which: the run loop's output work after the set-up (s) — writing
+    /// the history rows, handing the field frames to the thread that
+    /// writes them, and waiting for that thread (when it falls behind,
+    /// before a checkpoint and at the end).
+    /// `wall_seconds - setup_seconds - output_seconds` is the time of the
+    /// mechanics and the solvers.
     pub output_seconds: f64,
+    /// The time the thread writing the field frames spent on them (s):
+    /// element results, encoding, writing and syncing the VTU files and the
+    /// collection, the initial frame's included. It runs alongside the
+    /// steps and is not part of `wall_seconds`' breakdown; only the part
+    /// the loop waits for shows in `output_seconds`.
+    pub output_thread_seconds: f64,
     /// Of which: the first step of this session (s), without its outputs;
     /// it also builds what the linear solver keeps across steps (symbolic
     /// factorisations, the multigrid hierarchy).
@@ -193,11 +210,10 @@ struct StepRecord {
     states: [f64; 3],
 }
 
-struct Writer<'a> {
+/// The history's rows, written by the run loop.
+struct History<'a> {
     setup: &'a Setup,
-    dir: PathBuf,
-    history: HistoryWriter,
-    pvd: PvdWriter,
+    writer: HistoryWriter,
     scratch: Vec<f64>,
 }
 
@@ -238,7 +254,9 @@ pub fn history_columns(setup: &Setup) -> Vec<String> {
     columns
 }
 
-impl Writer<'_> {
+impl History<'_> {
+    /// Appends and flushes the row of `state` after `r`; returns the
+    /// kinetic energy.
     fn row(&mut self, state: &State, r: &StepRecord) -> Result<f64, RunError> {
         let model = &self.setup.model;
         let kinetic = model.kinetic_energy(&state.velocities, &mut self.scratch);
@@ -275,88 +293,9 @@ impl Writer<'_> {
             r.states[1],
             r.states[2],
         ]);
-        let path = self.history.path().to_path_buf();
-        self.history.write_row(&row).map_err(io_err(&path))?;
+        let path = self.writer.path().to_path_buf();
+        self.writer.write_row(&row).map_err(io_err(&path))?;
         Ok(kinetic)
-    }
-
-    fn frame(
-        &mut self,
-        step: usize,
-        state: &State,
-        contact: Option<&ContactReport>,
-    ) -> Result<(), RunError> {
-        let model = &self.setup.model;
-        let positions: Vec<[f64; 3]> = state
-            .positions
-            .chunks(3)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect();
-        let displacement: Vec<f64> = state
-            .positions
-            .iter()
-            .zip(model.mesh.nodes.iter().flatten())
-            .map(|(y, x)| y - x)
-            .collect();
-        let contact: Vec<f64> = match contact {
-            Some(c) => c.nodal_forces.iter().flatten().copied().collect(),
-            None => vec![0.0; state.positions.len()],
-        };
-        let results = model.element_results(&state.positions);
-        let stress: Vec<f64> = results.stress.iter().flatten().copied().collect();
-        let principal: Vec<f64> = results.principal.iter().flatten().copied().collect();
-        let wrinkle = &results.state;
-        let rel = frame_relative_path(step as u64);
-        let path = self.dir.join(&rel);
-        let frame = Frame {
-            positions: &positions,
-            connectivity: &model.mesh.connectivity,
-            nodes_per_element: model.mesh.order.nodes_per_element(),
-            point_data: vec![
-                DataArray {
-                    name: "displacement",
-                    components: 3,
-                    values: Values::F64(&displacement),
-                    component_names: &[],
-                },
-                DataArray {
-                    name: "velocity",
-                    components: 3,
-                    values: Values::F64(&state.velocities),
-                    component_names: &[],
-                },
-                DataArray {
-                    name: "contact_force",
-                    components: 3,
-                    values: Values::F64(&contact),
-                    component_names: &[],
-                },
-            ],
-            cell_data: vec![
-                DataArray {
-                    name: "stress",
-                    components: 3,
-                    values: Values::F64(&stress),
-                    component_names: &["xx", "yy", "xy"],
-                },
-                DataArray {
-                    name: "principal_stress",
-                    components: 2,
-                    values: Values::F64(&principal),
-                    component_names: &["max", "min"],
-                },
-                DataArray {
-                    name: "wrinkle_state",
-                    components: 1,
-                    values: Values::I32(wrinkle),
-                    component_names: &[],
-                },
-            ],
-            time: state.time,
-        };
-        write_vtu(&path, &frame).map_err(io_err(&path))?;
-        let pvd_path = self.pvd.path().to_path_buf();
-        self.pvd.push(state.time, &rel).map_err(io_err(&pvd_path))
     }
 }
 
@@ -422,7 +361,10 @@ pub fn run_with(
             .zip(state.contact.as_ref())
             .map(|(c, s)| c.report(&state.positions, state.time, s))
     };
-    let (mut state, mut counters, mut writer, mut frames) = if control.resume {
+    // `written`: the frames handed to the writer thread, `(time, step)`;
+    // a fresh run also has its initial frame to hand over.
+    let (mut state, mut counters, mut history, pvd, mut written, initial_frame) = if control.resume
+    {
         let bodies = model.contact.as_ref().map_or(0, |c| c.bodies.len());
         let path = checkpoint_path(out);
         let bytes = std::fs::read(&path)
@@ -435,19 +377,18 @@ pub fn run_with(
             .iter()
             .map(|(t, k)| (*t, frame_relative_path(*k as u64)))
             .collect();
-        let writer = Writer {
+        let history = History {
             setup,
-            dir: out.to_path_buf(),
-            history: HistoryWriter::resume(
+            writer: HistoryWriter::resume(
                 &history_path,
                 &history_columns(setup),
                 ck.counters.step + 1,
             )
             .map_err(|e| RunError::Resume(format!("{}: {e}", history_path.display())))?,
-            pvd: PvdWriter::resume(out.join("fields.pvd"), entries).map_err(io_err(out))?,
             scratch: vec![0.0; model.dofs()],
         };
-        (ck.state, ck.counters, writer, ck.frames)
+        let pvd = PvdWriter::resume(out.join("fields.pvd"), entries).map_err(io_err(out))?;
+        (ck.state, ck.counters, history, pvd, ck.frames, None)
     } else {
         let state = match &setup.analysis {
             Analysis::Dynamic { newmark, .. } => match newmark.initial_state(model, &mut ws) {
@@ -464,17 +405,15 @@ pub fn run_with(
                 State::at_rest(model, x.clone())
             }
         };
-        let mut writer = Writer {
+        let mut history = History {
             setup,
-            dir: out.to_path_buf(),
-            history: HistoryWriter::create(&history_path, &history_columns(setup))
+            writer: HistoryWriter::create(&history_path, &history_columns(setup))
                 .map_err(io_err(&history_path))?,
-            pvd: PvdWriter::new(out.join("fields.pvd")),
             scratch: vec![0.0; model.dofs()],
         };
         let strain0 = model.strain_energy(&state.positions);
         let contact0 = contact_report(&state);
-        writer.row(
+        history.row(
             &state,
             &StepRecord {
                 step: 0,
@@ -484,194 +423,228 @@ pub fn run_with(
                 cutbacks: 0,
                 min_stretch: model.min_stretch(&state.positions).0,
                 contact: contact0.clone(),
-                states: model.element_results(&state.positions).state_fractions(),
+                states: model.state_fractions(&state.positions),
             },
         )?;
-        writer.frame(0, &state, contact0.as_ref())?;
+        let initial_frame = Snapshot::of(0, &state, contact0.as_ref());
         let counters = Counters {
             last_strain: strain0,
             ..Counters::default()
         };
-        (state, counters, writer, vec![(0.0, 0)])
+        let pvd = PvdWriter::new(out.join("fields.pvd"));
+        (
+            state,
+            counters,
+            history,
+            pvd,
+            vec![(0.0, 0)],
+            Some(initial_frame),
+        )
     };
-    let setup_seconds = start.elapsed().as_secs_f64();
-    let mut output_seconds = 0.0;
-    let mut first_step_seconds = None;
-    let mut last_contact = contact_report(&state);
-    let mut failure: Option<RunError> = None;
-    let mut interrupted = false;
-    let mut k = 0usize; // scheduled-step index
-    'schedule: for (count, dt) in &schedule {
-        for _ in 0..*count {
-            k += 1;
-            if k <= counters.scheduled_done {
-                continue;
+    // The frames' thread borrows the model and the output directory; the
+    // scope ends only when it has written every frame handed to it.
+    std::thread::scope(|scope| {
+        let mut frame_writer = match frames::spawn(scope, model, out, pvd) {
+            Ok(w) => w,
+            Err(e) => {
+                let message = format!("cannot start the thread writing the field frames: {e}");
+                return Err(setup_failure(setup, out, start, message));
             }
-            // Each scheduled step may be split into 2^k sub-steps.
-            let mut pending: Vec<(f64, usize)> = vec![(*dt, 0)];
-            while let Some((h, depth)) = pending.pop() {
-                let result = advance(setup, &mut state, h, length, &mut ws);
-                match result {
-                    Ok(outcome) => {
-                        counters.step += 1;
-                        let step = counters.step;
-                        counters.iterations += outcome.newton.iterations;
-                        if depth > 0 {
-                            counters.cutback_steps += 1;
-                        }
-                        counters.last_strain = outcome.strain_energy;
-                        let (stretch, element) = model.min_stretch(&state.positions);
-                        last_contact = contact_report(&state);
-                        if counters.first_contact_time.is_none()
-                            && last_contact.as_ref().is_some_and(|c| c.active > 0)
-                        {
-                            counters.first_contact_time = Some(state.time);
-                        }
-                        if first_step_seconds.is_none() {
-                            first_step_seconds =
-                                Some(start.elapsed().as_secs_f64() - setup_seconds);
-                        }
-                        let output_start = Instant::now();
-                        let kinetic = writer.row(
-                            &state,
-                            &StepRecord {
+        };
+        if let Some(snapshot) = initial_frame {
+            frame_writer.submit(snapshot)?;
+        }
+        let setup_seconds = start.elapsed().as_secs_f64();
+        let mut output_seconds = 0.0;
+        let mut first_step_seconds = None;
+        let mut last_contact = contact_report(&state);
+        let mut failure: Option<RunError> = None;
+        let mut interrupted = false;
+        let mut k = 0usize; // scheduled-step index
+        'schedule: for (count, dt) in &schedule {
+            for _ in 0..*count {
+                k += 1;
+                if k <= counters.scheduled_done {
+                    continue;
+                }
+                // Each scheduled step may be split into 2^k sub-steps.
+                let mut pending: Vec<(f64, usize)> = vec![(*dt, 0)];
+                while let Some((h, depth)) = pending.pop() {
+                    let result = advance(setup, &mut state, h, length, &mut ws);
+                    match result {
+                        Ok(outcome) => {
+                            counters.step += 1;
+                            let step = counters.step;
+                            counters.iterations += outcome.newton.iterations;
+                            if depth > 0 {
+                                counters.cutback_steps += 1;
+                            }
+                            counters.last_strain = outcome.strain_energy;
+                            let (stretch, element) = model.min_stretch(&state.positions);
+                            last_contact = contact_report(&state);
+                            if counters.first_contact_time.is_none()
+                                && last_contact.as_ref().is_some_and(|c| c.active > 0)
+                            {
+                                counters.first_contact_time = Some(state.time);
+                            }
+                            if first_step_seconds.is_none() {
+                                first_step_seconds =
+                                    Some(start.elapsed().as_secs_f64() - setup_seconds);
+                            }
+                            let output_start = Instant::now();
+                            let kinetic = history.row(
+                                &state,
+                                &StepRecord {
+                                    step,
+                                    dt: h,
+                                    iterations: outcome.newton.iterations,
+                                    strain: outcome.strain_energy,
+                                    cutbacks: depth,
+                                    min_stretch: stretch,
+                                    contact: last_contact.clone(),
+                                    states: model.state_fractions(&state.positions),
+                                },
+                            )?;
+                            output_seconds += output_start.elapsed().as_secs_f64();
+                            observer(&StepInfo {
                                 step,
+                                time: state.time,
+                                end_time,
+                                scheduled_done: k,
+                                scheduled_total: schedule.iter().map(|(n, _)| n).sum(),
                                 dt: h,
                                 iterations: outcome.newton.iterations,
-                                strain: outcome.strain_energy,
                                 cutbacks: depth,
-                                min_stretch: stretch,
-                                contact: last_contact.clone(),
-                                states: model.state_fractions(&state.positions),
-                            },
-                        )?;
-                        output_seconds += output_start.elapsed().as_secs_f64();
-                        observer(&StepInfo {
-                            step,
-                            time: state.time,
-                            end_time,
-                            scheduled_done: k,
-                            scheduled_total: schedule.iter().map(|(n, _)| n).sum(),
-                            dt: h,
-                            iterations: outcome.newton.iterations,
-                            cutbacks: depth,
-                            kinetic_energy: kinetic,
-                            strain_energy: outcome.strain_energy,
-                            external_work: state.external_work,
-                        });
-                        counters.since_frame += 1;
-                        if counters.since_frame >= setup.output_every {
-                            let output_start = Instant::now();
-                            writer.frame(step, &state, last_contact.as_ref())?;
-                            output_seconds += output_start.elapsed().as_secs_f64();
-                            frames.push((state.time, step));
-                            counters.last_written = step;
-                            counters.since_frame = 0;
+                                kinetic_energy: kinetic,
+                                strain_energy: outcome.strain_energy,
+                                external_work: state.external_work,
+                            });
+                            counters.since_frame += 1;
+                            if counters.since_frame >= setup.output_every {
+                                let output_start = Instant::now();
+                                frame_writer.submit(Snapshot::of(
+                                    step,
+                                    &state,
+                                    last_contact.as_ref(),
+                                ))?;
+                                output_seconds += output_start.elapsed().as_secs_f64();
+                                written.push((state.time, step));
+                                counters.last_written = step;
+                                counters.since_frame = 0;
+                            }
+                            // With a wrinkling model compression carries no
+                            // stress, and the instability does not exist.
+                            if stretch < SVK_CRITICAL_STRETCH
+                                && model.material.wrinkle_state([0.0; 3]).is_none()
+                            {
+                                failure = Some(RunError::MaterialInstability {
+                                    time: state.time,
+                                    element,
+                                    stretch,
+                                    out: out.to_path_buf(),
+                                });
+                                break 'schedule;
+                            }
                         }
-                        // With a wrinkling model compression carries no
-                        // stress, and the instability does not exist.
-                        if stretch < SVK_CRITICAL_STRETCH
-                            && model.material.wrinkle_state([0.0; 3]).is_none()
-                        {
-                            failure = Some(RunError::MaterialInstability {
+                        Err(e) if depth < setup.max_cutbacks => {
+                            let _ = e;
+                            pending.push((0.5 * h, depth + 1));
+                            pending.push((0.5 * h, depth + 1));
+                        }
+                        Err(e) => {
+                            failure = Some(RunError::Step {
+                                step: counters.step,
                                 time: state.time,
-                                element,
-                                stretch,
+                                dt: h,
+                                cutbacks: depth,
+                                cause: e,
+                                hint: if matches!(setup.analysis, Analysis::Static { .. }) {
+                                    "; a static analysis needs a membrane in tension from the first increment on (prestress, or supports that stretch it): a slack membrane has no stiffness across its plane, so run it dynamically to rest instead (beta = 1, gamma = 1.5)".into()
+                                } else {
+                                    String::new()
+                                },
                                 out: out.to_path_buf(),
                             });
                             break 'schedule;
                         }
                     }
-                    Err(e) if depth < setup.max_cutbacks => {
-                        let _ = e;
-                        pending.push((0.5 * h, depth + 1));
-                        pending.push((0.5 * h, depth + 1));
-                    }
-                    Err(e) => {
-                        failure = Some(RunError::Step {
-                            step: counters.step,
-                            time: state.time,
-                            dt: h,
-                            cutbacks: depth,
-                            cause: e,
-                            hint: if matches!(setup.analysis, Analysis::Static { .. }) {
-                                "; a static analysis needs a membrane in tension from the first increment on (prestress, or supports that stretch it): a slack membrane has no stiffness across its plane, so run it dynamically to rest instead (beta = 1, gamma = 1.5)".into()
-                            } else {
-                                String::new()
-                            },
-                            out: out.to_path_buf(),
-                        });
-                        break 'schedule;
-                    }
+                }
+                counters.scheduled_done = k;
+                let stop = control.stop.is_some_and(|s| s.load(Ordering::SeqCst));
+                let every = setup.checkpoint_every;
+                if stop || (every > 0 && k.is_multiple_of(every)) {
+                    // The checkpoint lists the frames as written: they must
+                    // be, or a resumed collection would name missing files.
+                    let output_start = Instant::now();
+                    frame_writer.flush()?;
+                    output_seconds += output_start.elapsed().as_secs_f64();
+                    let ck = Checkpoint {
+                        scenario_hash: setup.scenario_hash,
+                        counters: Counters {
+                            wall_seconds: counters.wall_seconds + start.elapsed().as_secs_f64(),
+                            ..counters
+                        },
+                        state: state.clone(),
+                        external_forces: ws.f_ext.clone(),
+                        frames: written.clone(),
+                    };
+                    let path = checkpoint_path(out);
+                    write_atomic(&path, &ck.to_bytes()).map_err(io_err(&path))?;
+                }
+                if stop {
+                    interrupted = true;
+                    break 'schedule;
                 }
             }
-            counters.scheduled_done = k;
-            let stop = control.stop.is_some_and(|s| s.load(Ordering::SeqCst));
-            let every = setup.checkpoint_every;
-            if stop || (every > 0 && k.is_multiple_of(every)) {
-                let ck = Checkpoint {
-                    scenario_hash: setup.scenario_hash,
-                    counters: Counters {
-                        wall_seconds: counters.wall_seconds + start.elapsed().as_secs_f64(),
-                        ..counters
-                    },
-                    state: state.clone(),
-                    external_forces: ws.f_ext.clone(),
-                    frames: frames.clone(),
-                };
-                let path = checkpoint_path(out);
-                write_atomic(&path, &ck.to_bytes()).map_err(io_err(&path))?;
-            }
-            if stop {
-                interrupted = true;
-                break 'schedule;
-            }
         }
-    }
-    if counters.last_written != counters.step && !interrupted {
         let output_start = Instant::now();
-        writer.frame(counters.step, &state, last_contact.as_ref())?;
+        if counters.last_written != counters.step && !interrupted {
+            frame_writer.submit(Snapshot::of(counters.step, &state, last_contact.as_ref()))?;
+        }
+        // Every frame is on disk before the summary says how the run ended.
+        let output_thread_seconds = frame_writer.finish()?.as_secs_f64();
         output_seconds += output_start.elapsed().as_secs_f64();
-    }
-    let kinetic = model.kinetic_energy(&state.velocities, &mut writer.scratch);
-    let message = if interrupted {
-        Some(format!(
-            "interrupted after step {} at t = {:.6} s; resume with `drape run --resume {}`",
+        let kinetic = model.kinetic_energy(&state.velocities, &mut history.scratch);
+        let message = if interrupted {
+            Some(format!(
+                "interrupted after step {} at t = {:.6} s; resume with `drape run --resume {}`",
+                counters.step,
+                state.time,
+                out.display()
+            ))
+        } else {
+            failure.as_ref().map(ToString::to_string)
+        };
+        let mut summary = summary(
+            setup,
+            &state,
+            message.clone(),
             counters.step,
-            state.time,
-            out.display()
-        ))
-    } else {
-        failure.as_ref().map(ToString::to_string)
-    };
-    let mut summary = summary(
-        setup,
-        &state,
-        message.clone(),
-        counters.step,
-        counters.iterations,
-        counters.cutback_steps,
-        start,
-        kinetic,
-        counters.last_strain,
-    );
-    summary.wall_seconds += counters.wall_seconds;
-    summary.setup_seconds = setup_seconds;
-    summary.output_seconds = output_seconds;
-    summary.first_step_seconds = first_step_seconds.unwrap_or(0.0);
-    summary.linear = ws.newton.linear.stats;
-    summary.first_contact_time = counters.first_contact_time;
-    if interrupted {
-        summary.status = "interrupted".into();
-    }
-    write_summary(out, &summary)?;
-    match (failure, interrupted) {
-        (Some(e), _) => Err(e),
-        (None, true) => Err(RunError::Interrupted {
-            message: message.unwrap_or_default(),
-        }),
-        (None, false) => Ok(summary),
-    }
+            counters.iterations,
+            counters.cutback_steps,
+            start,
+            kinetic,
+            counters.last_strain,
+        );
+        summary.wall_seconds += counters.wall_seconds;
+        summary.setup_seconds = setup_seconds;
+        summary.output_seconds = output_seconds;
+        summary.output_thread_seconds = output_thread_seconds;
+        summary.first_step_seconds = first_step_seconds.unwrap_or(0.0);
+        summary.linear = ws.newton.linear.stats;
+        summary.first_contact_time = counters.first_contact_time;
+        if interrupted {
+            summary.status = "interrupted".into();
+        }
+        write_summary(out, &summary)?;
+        match (failure, interrupted) {
+            (Some(e), _) => Err(e),
+            (None, true) => Err(RunError::Interrupted {
+                message: message.unwrap_or_default(),
+            }),
+            (None, false) => Ok(summary),
+        }
+    })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -705,6 +678,7 @@ fn summary(
         wall_seconds: start.elapsed().as_secs_f64(),
         setup_seconds: 0.0,
         output_seconds: 0.0,
+        output_thread_seconds: 0.0,
         first_step_seconds: 0.0,
         nodes: model.mesh.node_count(),
         elements: model.mesh.element_count(),
