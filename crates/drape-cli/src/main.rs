@@ -154,6 +154,15 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+    // The main thread runs the simulation; as a worker of rayon's pool its
+    // parallel sections (two-part assembly, the split block LU) fork
+    // locally, where from outside the pool every fork would be handed to
+    // the pool and the main thread put to sleep until it is done (two
+    // thread wake-ups per fork, which cost more than a small mesh's
+    // assembly). Failure (a pool built already) leaves the default pool.
+    let _ = rayon::ThreadPoolBuilder::new()
+        .use_current_thread()
+        .build_global();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run {
