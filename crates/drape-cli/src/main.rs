@@ -14,7 +14,12 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
+mod alloc;
 mod examples;
+
+/// Transparent huge pages for the large arrays of big meshes (see [`alloc`]).
+#[global_allocator]
+static ALLOCATOR: alloc::HugePageAlloc = alloc::HugePageAlloc;
 
 /// Membranes and fabrics in large displacement: positional finite elements,
 /// Newmark dynamics, Newton–Raphson.
