@@ -25,10 +25,11 @@
 //! iteration then uses: one element loop per Newton iteration instead of
 //! two. A trial the line search shortens is evaluated for its residual only.
 //!
-//! After a full Newton step that shrank the increment at least fourfold,
-//! up to [`NewtonSettings::chord_steps`] chord steps reuse its
-//! factorisation (the function `chord_steps`); the convergence test is the same
-//! for either kind of increment.
+//! After a full Newton step that shrank the increment at least fourfold
+//! or the residual at least a hundredfold, up to
+//! [`NewtonSettings::chord_steps`] chord steps reuse its factorisation
+//! (the function `chord_steps`); the convergence test is the same for
+//! either kind of increment.
 //!
 //! NaN or infinite residuals, a residual that grows by `1e8` over the
 //! first one, and running out of linear solves (Newton iterations and
@@ -240,6 +241,7 @@ pub fn solve(
         // leaving) and a full step overshoots.
         ws.y_old.copy_from_slice(y);
         let previous = increment;
+        let previous_residual = residual;
         let full_increment = norm(&ws.dy) / length;
         let chord_ahead = settings.chord_steps > 0 && full_increment <= 0.25 * previous;
         // A full step whose increment is above the tolerance cannot end
@@ -274,13 +276,20 @@ pub fn solve(
         increment = alpha * norm(&ws.dy) / length;
         report.increments.push(increment);
         report.iterations += 1;
-        // Chord steps only where Newton already contracts fast (a full
-        // step at most a quarter of the one before): the local regime
-        // where the Hessian changes little. Far from it a chord step can
-        // carry the iterate to another root (seen on an undamped swinging
-        // cloth whose elements approach SVK's compressive instability).
-        if alpha == 1.0 && increment <= 0.25 * previous {
-            chord_steps(
+        // Chord steps only where Newton already contracts fast: a full
+        // step at most a quarter of the one before, or one that cut the
+        // residual a hundredfold — the local regime where the Hessian
+        // changes little. Far from it a chord step can carry the iterate
+        // to another root (seen on an undamped swinging cloth whose
+        // elements approach SVK's compressive instability). The residual
+        // test catches the step after a linear phase: where wrinkling
+        // states or contacts switched between the first iterates, the
+        // second increment is only a few times smaller than the first,
+        // yet the residual falls by orders of magnitude and the next
+        // increment is at the tolerance.
+        if alpha == 1.0
+            && (increment <= 0.25 * previous || residual <= 0.01 * previous_residual)
+            && chord_steps(
                 system,
                 y,
                 length,
@@ -290,7 +299,11 @@ pub fn solve(
                 &mut eval,
                 &mut residual,
                 &mut increment,
-            );
+            )
+        {
+            // The iterate moved: a Hessian assembled at the Newton
+            // iterate (with its residual, above) is out of date.
+            have_hessian = false;
         }
     }
 }
@@ -309,7 +322,7 @@ pub fn solve(
 /// states switching), the contraction test rejects the step and Newton
 /// assembles a new Hessian. A rejected step is undone. The convergence
 /// test is unchanged: the last increment applied, chord or Newton, must be
-/// below the tolerance.
+/// below the tolerance. Returns whether a chord step was accepted.
 #[allow(clippy::too_many_arguments)]
 fn chord_steps(
     system: &mut impl NewtonSystem,
@@ -321,23 +334,24 @@ fn chord_steps(
     eval: &mut Evaluation,
     residual: &mut f64,
     increment: &mut f64,
-) {
+) -> bool {
+    let mut moved = false;
     for _ in 0..settings.chord_steps {
         if converged(settings, *increment, *residual, eval.scale)
             || report.iterations + report.chord_steps >= settings.max_iterations
         {
-            return;
+            return moved;
         }
         for (d, g) in ws.dy.iter_mut().zip(&ws.g) {
             *d = -g;
         }
         if !ws.linear.solve_again(&mut ws.dy) {
-            return;
+            return moved;
         }
         system.transform_increment(&mut ws.dy);
         let step = norm(&ws.dy) / length;
         if step.is_nan() || step > 0.25 * *increment {
-            return;
+            return moved;
         }
         ws.y_old.copy_from_slice(y);
         for (yi, d) in y.iter_mut().zip(&ws.dy) {
@@ -350,7 +364,7 @@ fn chord_steps(
             // (the system keeps per-evaluation state).
             y.copy_from_slice(&ws.y_old);
             *eval = system.evaluate(y, &mut ws.g, None);
-            return;
+            return moved;
         }
         *eval = trial_eval;
         *residual = trial;
@@ -358,5 +372,7 @@ fn chord_steps(
         report.residuals.push(trial);
         report.increments.push(step);
         report.chord_steps += 1;
+        moved = true;
     }
+    moved
 }
