@@ -134,7 +134,7 @@ impl BlockCsr {
     }
 
     /// The product `self * other` (Gustavson's row-by-row algorithm, in
-    /// the two passes of [`build_by_rows`]).
+    /// two passes: the length of each row, then its entries written in place).
     pub fn multiply(&self, other: &BlockCsr) -> BlockCsr {
         let n = other.ncols;
         // Scratch of one row range: a marker and a dense accumulator over
