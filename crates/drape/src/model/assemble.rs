@@ -153,9 +153,9 @@ impl Model {
                         -1.0,
                     );
                 }
-                // SAFETY: the elements of one colour (or of the two halves)
-                // share no node, so the entries written below are disjoint
-                // across threads.
+                // SAFETY: the elements of one colour share no node, so the
+                // entries written below are disjoint across threads (small
+                // meshes run on the calling thread alone).
                 unsafe {
                     for (a, &node) in el.iter().enumerate() {
                         for i in 0..3 {
@@ -185,14 +185,9 @@ impl Model {
             }
             sum
         };
-        if let Some([left, right, interface]) = &self.halves {
-            // Small meshes: the two halves at once, then their interface
-            // (one fork, no per-colour hand-offs).
-            let (a, b) = rayon::join(
-                || work(&mut Local::new(), left),
-                || work(&mut Local::new(), right),
-            );
-            return a + b + work(&mut Local::new(), interface);
+        if !self.parallel() {
+            let mut local = Local::new();
+            return self.colours.iter().map(|c| work(&mut local, c)).sum();
         }
         let mut energy = 0.0;
         for colour in &self.colours {
