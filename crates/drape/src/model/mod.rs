@@ -283,7 +283,7 @@ mod tests {
     use super::*;
     use crate::material::{Wrinkling, WrinklingModel};
     use crate::mesh::ElementOrder;
-    use crate::mesh::generate::{Pattern, disc, rectangle};
+    use crate::mesh::generate::{Pattern, rectangle};
 
     fn wrinkling_model(mesh: Mesh) -> Model {
         Model::new(
