@@ -160,11 +160,11 @@ fn main() -> ExitCode {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     // The main thread runs the simulation; as a worker of rayon's pool its
-    // parallel sections (two-part assembly, the split block LU) fork
-    // locally, where from outside the pool every fork would be handed to
-    // the pool and the main thread put to sleep until it is done (two
-    // thread wake-ups per fork, which cost more than a small mesh's
-    // assembly). Failure (a pool built already) leaves the default pool.
+    // parallel sections (the loops of meshes of 4,096 elements or more,
+    // the multigrid) fork locally, where from outside the pool every fork
+    // would be handed to the pool and the main thread put to sleep until
+    // it is done (two thread wake-ups per fork). Failure (a pool built
+    // already) leaves the default pool.
     let _ = rayon::ThreadPoolBuilder::new()
         .use_current_thread()
         .build_global();
