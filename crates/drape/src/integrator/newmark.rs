@@ -98,10 +98,11 @@ impl Newmark {
             None,
         );
         let mut rhs: Vec<f64> = (0..n).map(|i| ws.f_ext[i] - ws.f_int[i]).collect();
-        let mut m = vec![0.0; model.pattern.nnz()];
-        model.add_mass_to_hessian(1.0, &mut m);
-        model.apply_supports(&mut rhs, Some(&mut m));
-        ws.newton.linear.solve_mass(&m, &mut rhs)?;
+        let (m, linear) = ws.newton.matrix_and_solver();
+        m.fill(0.0);
+        model.add_mass_to_hessian(1.0, m);
+        model.apply_supports(&mut rhs, Some(&mut *m));
+        linear.solve_mass(m, &mut rhs)?;
         let mut state = State::at_rest(model, x);
         state.accelerations = rhs;
         Ok(state)

@@ -154,6 +154,16 @@ pub struct NewtonWorkspace {
 }
 
 impl NewtonWorkspace {
+    /// The Hessian buffer (values on the linear solver's pattern) and the
+    /// linear solver, for a one-off system on the same pattern between
+    /// Newton solves — the initial acceleration's mass matrix: no second
+    /// array of that size (250 MB for a million elements), and the buffer
+    /// is first written in set-up rather than in the first step. Newton
+    /// overwrites the values at its next evaluation.
+    pub fn matrix_and_solver(&mut self) -> (&mut [f64], &mut LinearSolver) {
+        (&mut self.h, &mut self.linear)
+    }
+
     /// Buffers for `n` unknowns and `nnz` Hessian entries on `linear`'s pattern.
     pub fn new(n: usize, nnz: usize, linear: LinearSolver) -> Self {
         Self {
