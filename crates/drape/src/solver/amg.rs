@@ -98,14 +98,9 @@ impl BlockCsr {
         }
         let mut cols = vec![0u32; self.cols.len()];
         let mut vals = vec![[0.0; 9]; self.cols.len()];
-        let ranges = if self.rows() > PARALLEL_ROWS {
-            4 * rayon::current_num_threads()
-        } else {
-            1
-        };
-        let per = self.ncols.div_ceil(ranges).max(1);
+        let per = self.ncols.div_ceil(ranges_for(self.rows())).max(1);
         let parts = split_rows(&ptr, per, &mut cols, &mut vals);
-        let move_range = |(start, end, c, v): RowRange| {
+        run_ranges(parts, |(start, end, c, v)| {
             let base = ptr[start];
             let mut next: Vec<usize> = ptr[start..end].iter().map(|p| p - base).collect();
             for r in 0..self.rows() {
@@ -119,12 +114,7 @@ impl BlockCsr {
                     }
                 }
             }
-        };
-        if ranges > 1 {
-            parts.into_par_iter().for_each(move_range);
-        } else {
-            parts.into_iter().for_each(move_range);
-        }
+        });
         BlockCsr {
             ptr,
             cols,
@@ -134,45 +124,40 @@ impl BlockCsr {
     }
 
     /// The product `self * other` (Gustavson's row-by-row algorithm, in
-    /// two passes: the length of each row, then its entries written in place).
+    /// the two passes of `build_by_rows`: the columns of each row, then
+    /// its blocks, written in place).
     pub fn multiply(&self, other: &BlockCsr) -> BlockCsr {
         let n = other.ncols;
         // Scratch of one row range: a marker and a dense accumulator over
         // the columns of the product, and the list of a row's columns.
+        // Rows differ, so the row index marks a column as seen.
         let scratch = || (vec![u32::MAX; n], vec![[0.0; 9]; n], Vec::<u32>::new());
-        let columns = |r: usize, (marker, _, list): &mut (Vec<u32>, Vec<Block>, Vec<u32>)| {
-            list.clear();
-            for k in self.ptr[r]..self.ptr[r + 1] {
-                let mid = self.cols[k] as usize;
-                for &c in &other.cols[other.ptr[mid]..other.ptr[mid + 1]] {
-                    if marker[c as usize] != r as u32 {
-                        marker[c as usize] = r as u32;
-                        list.push(c);
-                    }
-                }
-            }
-        };
         build_by_rows(
             self.rows(),
             n,
             scratch,
-            |r, s| {
-                columns(r, s);
-                s.2.len()
-            },
-            |r, s, cols, vals| {
-                // The marker of the counting pass holds `r` for this row's
-                // columns already: mark with `!r` instead.
-                let (marker, dense, list) = s;
+            |r, (marker, _, list)| {
                 list.clear();
-                let tag = !(r as u32);
+                for k in self.ptr[r]..self.ptr[r + 1] {
+                    let mid = self.cols[k] as usize;
+                    for &c in &other.cols[other.ptr[mid]..other.ptr[mid + 1]] {
+                        if marker[c as usize] != r as u32 {
+                            marker[c as usize] = r as u32;
+                            list.push(c);
+                        }
+                    }
+                }
+                list.len()
+            },
+            |r, (marker, dense, list), cols, vals| {
+                list.clear();
                 for k in self.ptr[r]..self.ptr[r + 1] {
                     let mid = self.cols[k] as usize;
                     let a = &self.vals[k];
                     for q in other.ptr[mid]..other.ptr[mid + 1] {
                         let c = other.cols[q] as usize;
-                        if marker[c] != tag {
-                            marker[c] = tag;
+                        if marker[c] != r as u32 {
+                            marker[c] = r as u32;
                             dense[c] = [0.0; 9];
                             list.push(c as u32);
                         }
@@ -270,6 +255,25 @@ fn split_rows<'a>(
     parts
 }
 
+/// How many row ranges a loop over `rows` rows is cut into: a few per
+/// thread on large matrices (for balance), one on small ones.
+fn ranges_for(rows: usize) -> usize {
+    if rows > PARALLEL_ROWS {
+        4 * rayon::current_num_threads()
+    } else {
+        1
+    }
+}
+
+/// Runs `work` on every range, on all threads when there are several.
+fn run_ranges<T: Send>(parts: Vec<T>, work: impl Fn(T) + Sync + Send) {
+    if parts.len() > 1 {
+        parts.into_par_iter().for_each(work);
+    } else {
+        parts.into_iter().for_each(work);
+    }
+}
+
 /// Builds a block matrix of `rows` rows and `ncols` columns row by row,
 /// in two passes over a few contiguous row ranges (in parallel on large
 /// matrices): `count(r, scratch)` gives the length of row `r`, then
@@ -277,8 +281,7 @@ fn split_rows<'a>(
 /// arrays are allocated once at their final size and written once: no
 /// growing vectors, no concatenation of per-range parts (at 700x700
 /// divisions the products hold about 400 MB). `scratch` makes each
-/// range's work space; the counting pass of a range runs before its
-/// filling pass with the same scratch.
+/// range's work space, afresh for each pass.
 fn build_by_rows<S>(
     rows: usize,
     ncols: usize,
@@ -286,27 +289,15 @@ fn build_by_rows<S>(
     count: impl Fn(usize, &mut S) -> usize + Sync,
     fill: impl Fn(usize, &mut S, &mut [u32], &mut [Block]) + Sync,
 ) -> BlockCsr {
-    let ranges = if rows > PARALLEL_ROWS {
-        4 * rayon::current_num_threads()
-    } else {
-        1
-    };
-    let per = rows.div_ceil(ranges).max(1);
+    let per = rows.div_ceil(ranges_for(rows)).max(1);
     let mut ptr = vec![0usize; rows + 1];
-    {
-        let lens = &mut ptr[1..];
-        let count_range = |(i, out): (usize, &mut [usize])| {
-            let mut s = scratch();
-            for (j, len) in out.iter_mut().enumerate() {
-                *len = count(i * per + j, &mut s);
-            }
-        };
-        if ranges > 1 {
-            lens.par_chunks_mut(per).enumerate().for_each(count_range);
-        } else {
-            lens.chunks_mut(per).enumerate().for_each(count_range);
+    let lens: Vec<(usize, &mut [usize])> = ptr[1..].chunks_mut(per).enumerate().collect();
+    run_ranges(lens, |(i, out)| {
+        let mut s = scratch();
+        for (j, len) in out.iter_mut().enumerate() {
+            *len = count(i * per + j, &mut s);
         }
-    }
+    });
     for r in 0..rows {
         ptr[r + 1] += ptr[r];
     }
@@ -314,22 +305,14 @@ fn build_by_rows<S>(
     let mut cols = vec![0u32; total];
     let mut vals = vec![[0.0; 9]; total];
     let parts = split_rows(&ptr, per, &mut cols, &mut vals);
-    let fill_range = |(start, end, c, v): RowRange| {
+    run_ranges(parts, |(start, end, c, v)| {
         let mut s = scratch();
         let base = ptr[start];
         for r in start..end {
-            // The counting pass is repeated on this range's scratch first,
-            // so that `fill` finds the state it left (for markers).
-            count(r, &mut s);
             let (a, b) = (ptr[r] - base, ptr[r + 1] - base);
             fill(r, &mut s, &mut c[a..b], &mut v[a..b]);
         }
-    };
-    if ranges > 1 {
-        parts.into_par_iter().for_each(fill_range);
-    } else {
-        parts.into_iter().for_each(fill_range);
-    }
+    });
     BlockCsr {
         ptr,
         cols,
@@ -369,6 +352,7 @@ fn smoothed_prolongator(
         list.len()
     };
     build_by_rows(a.rows(), count, scratch, sums, |r, list, cols, vals| {
+        sums(r, list);
         for ((c, v), (g, sum)) in cols.iter_mut().zip(vals.iter_mut()).zip(list.iter()) {
             let mut block = mul(&d_inv[r], sum);
             for x in &mut block {
@@ -777,7 +761,6 @@ mod tests {
         assert!(err < 1e-10, "{err:e}");
     }
 
-    /// Transpose and product agree with their definitions on a small case.
     /// The grid matrix with a non-symmetric pseudo-random part in every block.
     fn skewed(n: usize) -> BlockCsr {
         let mut a = grid(n, 1.0);
@@ -859,6 +842,7 @@ mod tests {
         }
     }
 
+    /// Transpose and product agree with their definitions on a small case.
     #[test]
     fn transpose_and_product() {
         let a = grid(3, 1.0);
