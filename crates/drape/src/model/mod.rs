@@ -127,12 +127,12 @@ impl Model {
     /// loop over ~400 nodes costs more than the loop (on the 20x20
     /// pedestal the hand-offs took a third of the CPU time), and even one
     /// fork per assembly (two halves of the mesh that share no node, then
-    /// their interface) was slower at every size below it on this 2-core
-    /// machine: medians of 5–8 interleaved runs, 1.34 → 1.27 s for the
-    /// 800-element pedestal, 2.56 → 2.03 s for the 1,350-element drape
-    /// tester, 2.87 → 2.67 s for a 3,200-element pedestal (the second
-    /// core then serves the frame writer). Results do not depend on the
-    /// thread count: parallel sums use fixed chunks summed in order.
+    /// their interface) was slower at every size below it on a 2-core
+    /// machine (docs/performance.md: 1.55 → 1.32 s for the 800-element
+    /// pedestal, 2.47 → 2.28 s for the 1,350-element drape tester, 2.87 →
+    /// 2.67 s for a 3,200-element pedestal; the second core then serves
+    /// the frame writer). Results do not depend on the thread count:
+    /// parallel sums use fixed chunks summed in order.
     pub fn parallel(&self) -> bool {
         self.mesh.element_count() >= PARALLEL_ABOVE
     }

@@ -365,9 +365,10 @@ pub struct SolverSpec {
     /// `"reuse"` (GMRES preconditioned by an earlier factorisation).
     #[serde(default)]
     pub linear: crate::solver::LinearMode,
-    /// Most chord steps after each Newton step, 0–10 (0: plain Newton):
-    /// solves with the factorisation just made, kept while each shrinks the
-    /// increment at least fourfold. Default 2.
+    /// Most chord steps after each Newton step that contracted fast (the
+    /// increment shrank fourfold or the residual a hundredfold), 0–10 (0:
+    /// plain Newton): solves with the factorisation just made, kept while
+    /// each shrinks the increment at least fourfold. Default 2.
     #[serde(default = "default_chord_steps")]
     pub chord_steps: usize,
 }
