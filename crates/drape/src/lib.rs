@@ -23,6 +23,7 @@ pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod output;
+pub mod par;
 pub mod scenario;
 pub mod simulation;
 pub mod solver;
