@@ -122,7 +122,7 @@ fn serve(team: &Team) {
             }
             std::hint::spin_loop();
             spins = spins.wrapping_add(1);
-            if spins % 256 == 0 {
+            if spins.is_multiple_of(256) {
                 // Leave the core to other threads now and then (the frame
                 // writer), and park when idle long enough.
                 thread::yield_now();
@@ -189,7 +189,7 @@ where
         while !job.done.load(Ordering::Acquire) {
             std::hint::spin_loop();
             spins = spins.wrapping_add(1);
-            if spins % 1024 == 0 {
+            if spins.is_multiple_of(1024) {
                 thread::yield_now();
             }
         }
