@@ -92,8 +92,9 @@ fn block_lu(model: &Model, h: &[f64]) {
     let t = Instant::now();
     let mut lu = BlockLu::new(ptr, rows).unwrap();
     println!(
-        "  block LU: symbolic {:.4} s, {} blocks in L ({} scalars), {:.1} / {:.1} Mflop (sym / general), {} MB",
+        "  block LU: symbolic {:.4} s, split in two halves: {}, {} blocks in L ({} scalars), {:.1} / {:.1} Mflop (sym / general), {} MB",
         t.elapsed().as_secs_f64(),
+        lu.is_split(),
         lu.factor_blocks(),
         9 * lu.factor_blocks() + 6 * lu.nodes(),
         2e-6 * lu.flops(true),

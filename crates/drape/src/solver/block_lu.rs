@@ -46,6 +46,7 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::amd;
+use std::ops::Range;
 
 /// A 3x3 block, row-major: `m[3 r + c]`.
 pub type Block = [f64; 9];
@@ -172,9 +173,10 @@ struct Source {
     stride: usize,
 }
 
-/// Symbolic analysis and numeric storage of the block LU of one pattern.
+/// The symbolic analysis of one pattern: the ordering, the pattern of `L`
+/// and where the blocks of `A` lie in the scalar values.
 #[derive(Debug, Clone)]
-pub struct BlockLu {
+struct Symbolic {
     /// `perm[new] = old` node.
     perm: Vec<usize>,
     /// Strictly lower pattern of `L` by block column (permuted indices,
@@ -187,37 +189,99 @@ pub struct BlockLu {
     /// Per permuted column `J`: the blocks `A_JI` with `I > J`.
     row_src_ptr: Vec<usize>,
     row_src: Vec<Source>,
+    /// `(a, b)`: columns `0..a` and `a..b` are two parts that share no
+    /// entry of `L` (neither is coupled to the other but through the
+    /// separator `b..n`); `(0, 0)` when the ordering is not split.
+    split: (usize, usize),
+}
+
+/// The accumulators of one thread: a column and a row of the active
+/// submatrix, and the linked lists of the columns `k` whose next row is
+/// `j` (`head[j]`).
+#[derive(Debug, Clone)]
+struct Work {
+    x_col: Vec<Block>,
+    x_row: Vec<Block>,
+    head: Vec<u32>,
+}
+
+impl Work {
+    fn new(n: usize) -> Self {
+        Self {
+            x_col: vec![[0.0; 9]; n],
+            x_row: vec![[0.0; 9]; n],
+            head: vec![NONE; n],
+        }
+    }
+}
+
+/// What the columns of one part subtract from the separator's columns,
+/// `sum_k L~_ik U_kj` over the part's `k` (negated), by the positions of
+/// `L`'s separator columns.
+#[derive(Debug, Clone)]
+struct Contribution {
+    diag: Vec<Block>,
+    col: Vec<Block>,
+    row: Vec<Block>,
+}
+
+/// The numeric arrays of a range of columns (`c0..`, whose entries of `L`
+/// start at position `q0`), borrowed apart from the other ranges'.
+struct Columns<'a> {
+    c0: usize,
+    q0: usize,
+    l: &'a mut [Block],
+    u: &'a mut [Block],
+    d_inv: &'a mut [Block],
+    next: &'a mut [u32],
+    cursor: &'a mut [usize],
+}
+
+/// Symbolic analysis and numeric storage of the block LU of one pattern.
+#[derive(Debug, Clone)]
+pub struct BlockLu {
+    sym: Symbolic,
     /// `L~_ij` by position in `l_rows`.
     l: Vec<Block>,
     /// `U_ji` (row `j`, column `i = l_rows[q]`) by position `q`.
     u: Vec<Block>,
     /// `D_j^-1`.
     d_inv: Vec<Block>,
-    /// Dense accumulators of one column and one row.
-    x_col: Vec<Block>,
-    x_row: Vec<Block>,
-    /// Linked lists of the columns `k` whose next row is `j`.
-    head: Vec<u32>,
+    /// Per column `k`: the next entry of `L` to use, and the next column
+    /// in the list of that entry's row.
     next: Vec<u32>,
     cursor: Vec<usize>,
+    /// Accumulators of the first part and the separator, and of the
+    /// second part.
+    work: Work,
+    work_b: Work,
+    /// The two parts' updates of the separator.
+    contribution: [Contribution; 2],
     /// Solve work (permuted right-hand side).
-    work: Vec<[f64; 3]>,
+    rhs: Vec<[f64; 3]>,
     /// Multiply–adds of one symmetric / non-symmetric factorisation.
     flops: (f64, f64),
 }
 
 const NONE: u32 = u32::MAX;
 
-impl BlockLu {
-    /// Analyses the node graph `(node_ptr, node_rows)` (CSC, symmetric,
-    /// diagonal included, rows sorted) of a matrix whose scalar CSC values
-    /// follow [`super::pattern::SparsePattern`]'s layout: the value index
-    /// of entry `(3a + i, 3b + j)`, with `p` the position of `a` in column
-    /// `b`, is `9 ptr[b] + 3 j deg(b) + 3 (p - ptr[b]) + i`.
-    pub fn new(node_ptr: &[usize], node_rows: &[usize]) -> Result<Self, BlockLuError> {
-        let n = node_ptr.len() - 1;
-        let (perm, perm_inv) = Self::amd_order(node_ptr, node_rows)?;
+/// Below this many nodes the ordering is not split in two.
+const SPLIT_MIN_NODES: usize = 100;
 
+/// Level sets tried as separators (the best balanced ones).
+const CUT_CANDIDATES: usize = 5;
+
+impl Symbolic {
+    /// The analysis of the node graph for the ordering `perm`
+    /// (`perm_inv` its inverse) split as `split`.
+    fn new(
+        node_ptr: &[usize],
+        node_rows: &[usize],
+        perm: Vec<usize>,
+        perm_inv: &[usize],
+        split: (usize, usize),
+    ) -> Result<Self, BlockLuError> {
+        let n = perm.len();
         // Permuted columns: the rows of each, and the value sources.
         let mut col_src_ptr = vec![0; n + 1];
         let mut row_src_ptr = vec![0; n + 1];
@@ -267,55 +331,14 @@ impl BlockLu {
             col_src_ptr[jn + 1] = col_src.len();
             row_src_ptr[jn + 1] = row_src.len();
         }
-
-        // Pattern of L: column j gathers its own rows below the diagonal
-        // and those of its children in the elimination tree.
-        let mut l_ptr = vec![0usize; n + 1];
-        let mut l_rows: Vec<u32> = Vec::new();
-        let mut mark = vec![NONE; n];
-        let mut child_head = vec![NONE; n];
-        let mut child_next = vec![NONE; n];
-        let mut list: Vec<u32> = Vec::new();
-        for j in 0..n {
-            list.clear();
-            mark[j] = j as u32;
-            for s in &col_src[col_src_ptr[j]..col_src_ptr[j + 1]] {
-                let i = s.row as usize;
-                if mark[i] != j as u32 {
-                    mark[i] = j as u32;
-                    list.push(s.row);
-                }
-            }
-            let mut c = child_head[j];
-            while c != NONE {
-                for &i in &l_rows[l_ptr[c as usize]..l_ptr[c as usize + 1]] {
-                    if mark[i as usize] != j as u32 {
-                        mark[i as usize] = j as u32;
-                        list.push(i);
-                    }
-                }
-                c = child_next[c as usize];
-            }
-            list.sort_unstable();
-            l_rows.extend_from_slice(&list);
-            l_ptr[j + 1] = l_rows.len();
-            if let Some(&parent) = list.first() {
-                child_next[j] = child_head[parent as usize];
-                child_head[parent as usize] = j as u32;
-            }
-        }
-
-        // Multiply–adds: per (k, j) pair, the block updates below j.
-        let mut flops = (0.0, 0.0);
-        for k in 0..n {
-            let c = (l_ptr[k + 1] - l_ptr[k]) as f64;
-            // Column k updates sum_{m=1..c} m blocks (x_col) and as many
-            // minus one (x_row), 27 multiply–adds each.
-            flops.0 += 27.0 * c * (c + 1.0) / 2.0;
-            flops.1 += 27.0 * c * c;
-        }
-
-        let nnz = l_rows.len();
+        let (l_ptr, l_rows) = l_pattern(n, |j, rows| {
+            rows.extend(
+                col_src[col_src_ptr[j]..col_src_ptr[j + 1]]
+                    .iter()
+                    .map(|s| s.row)
+                    .filter(|&i| i as usize != j),
+            )
+        });
         Ok(Self {
             perm,
             l_ptr,
@@ -324,16 +347,367 @@ impl BlockLu {
             col_src,
             row_src_ptr,
             row_src,
+            split,
+        })
+    }
+
+    fn nodes(&self) -> usize {
+        self.perm.len()
+    }
+
+    /// Multiply–adds of the columns `range` (symmetric, non-symmetric):
+    /// column `k` updates `sum_{m=1..c} m` blocks of `x_col` and as many
+    /// minus one of `x_row`, 27 multiply–adds each.
+    fn flops(&self, range: Range<usize>) -> (f64, f64) {
+        range.fold((0.0, 0.0), |(s, g), k| {
+            let c = (self.l_ptr[k + 1] - self.l_ptr[k]) as f64;
+            (s + 27.0 * c * (c + 1.0) / 2.0, g + 27.0 * c * c)
+        })
+    }
+
+    /// Applies to the accumulators the updates of column `j` (and row `j`)
+    /// from the columns `k` in `work.head[j]` — all of `cols`' range —
+    /// and moves each `k` on to the list of its next row.
+    #[inline(always)]
+    fn update(&self, cols: &mut Columns, work: &mut Work, j: usize, symmetric: bool) {
+        let (c0, q0) = (cols.c0, cols.q0);
+        let mut k = work.head[j];
+        while k != NONE {
+            let ku = k as usize;
+            let next_k = cols.next[ku - c0];
+            let pos = cols.cursor[ku - c0];
+            let end = self.l_ptr[ku + 1];
+            let u_kj = cols.u[pos - q0];
+            for q in pos..end {
+                let i = self.l_rows[q] as usize;
+                mul_acc::<true>(&mut work.x_col[i], &cols.l[q - q0], &u_kj);
+            }
+            if !symmetric {
+                let l_jk = cols.l[pos - q0];
+                for q in pos + 1..end {
+                    let i = self.l_rows[q] as usize;
+                    mul_acc::<true>(&mut work.x_row[i], &l_jk, &cols.u[q - q0]);
+                }
+            }
+            // Column k's next row.
+            cols.cursor[ku - c0] = pos + 1;
+            if pos + 1 < end {
+                let r = self.l_rows[pos + 1] as usize;
+                cols.next[ku - c0] = work.head[r];
+                work.head[r] = k;
+            }
+            k = next_k;
+        }
+    }
+
+    /// Factorises the columns `range` (those of `cols`) by the left-looking
+    /// recurrence of the module docs, with the updates from the columns in
+    /// `work`'s lists and, for the separator, the parts' `contributions`.
+    #[inline(always)]
+    fn factor_range(
+        &self,
+        values: &[f64],
+        symmetric: bool,
+        cols: &mut Columns,
+        work: &mut Work,
+        range: Range<usize>,
+        contributions: &[Contribution],
+    ) -> Result<(), BlockLuError> {
+        let (c0, q0) = (cols.c0, cols.q0);
+        let (s0, qs0) = (self.split.1, self.l_ptr[self.split.1]);
+        for j in range {
+            // Scatter column j (rows >= j) and row j (columns > j) of A.
+            for s in &self.col_src[self.col_src_ptr[j]..self.col_src_ptr[j + 1]] {
+                work.x_col[s.row as usize] = BlockLu::gather(values, s);
+            }
+            if !symmetric {
+                for s in &self.row_src[self.row_src_ptr[j]..self.row_src_ptr[j + 1]] {
+                    // Block (J, I) as stored: gather gives A_JI directly.
+                    work.x_row[s.row as usize] = BlockLu::gather(values, s);
+                }
+            }
+            let diagonal_scale = work.x_col[j].iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for c in contributions {
+                add(&mut work.x_col[j], &c.diag[j - s0]);
+                for q in self.l_ptr[j]..self.l_ptr[j + 1] {
+                    let i = self.l_rows[q] as usize;
+                    add(&mut work.x_col[i], &c.col[q - qs0]);
+                    if !symmetric {
+                        add(&mut work.x_row[i], &c.row[q - qs0]);
+                    }
+                }
+            }
+            self.update(cols, work, j, symmetric);
+            let d = work.x_col[j];
+            let d_scale = d.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let d_inv = match invert(&d) {
+                Some(inv) if d_scale > 1e-10 * diagonal_scale => inv,
+                _ => {
+                    // Leave the accumulators clean for the next call.
+                    work.x_col[j] = [0.0; 9];
+                    for q in self.l_ptr[j]..self.l_ptr[j + 1] {
+                        let i = self.l_rows[q] as usize;
+                        work.x_col[i] = [0.0; 9];
+                        work.x_row[i] = [0.0; 9];
+                    }
+                    return Err(BlockLuError::Pivot { node: self.perm[j] });
+                }
+            };
+            cols.d_inv[j - c0] = d_inv;
+            work.x_col[j] = [0.0; 9];
+            for q in self.l_ptr[j]..self.l_ptr[j + 1] {
+                let i = self.l_rows[q] as usize;
+                let l_ij = std::mem::replace(&mut work.x_col[i], [0.0; 9]);
+                cols.u[q - q0] = if symmetric {
+                    mul(&d_inv, &transpose(&l_ij))
+                } else {
+                    mul(&d_inv, &std::mem::replace(&mut work.x_row[i], [0.0; 9]))
+                };
+                cols.l[q - q0] = l_ij;
+            }
+            // Column j joins the list of its first row.
+            cols.cursor[j - c0] = self.l_ptr[j];
+            if self.l_ptr[j] < self.l_ptr[j + 1] {
+                let r = self.l_rows[self.l_ptr[j]] as usize;
+                cols.next[j - c0] = work.head[r];
+                work.head[r] = j as u32;
+            }
+        }
+        Ok(())
+    }
+
+    /// After a part's columns are factorised: their updates of the
+    /// separator's columns, gathered into `out` (the accumulators are left
+    /// clean and the lists empty).
+    #[inline(always)]
+    fn contribute(
+        &self,
+        symmetric: bool,
+        cols: &mut Columns,
+        work: &mut Work,
+        out: &mut Contribution,
+    ) {
+        let (s0, qs0) = (self.split.1, self.l_ptr[self.split.1]);
+        for j in s0..self.nodes() {
+            self.update(cols, work, j, symmetric);
+            work.head[j] = NONE;
+            out.diag[j - s0] = std::mem::replace(&mut work.x_col[j], [0.0; 9]);
+            for q in self.l_ptr[j]..self.l_ptr[j + 1] {
+                let i = self.l_rows[q] as usize;
+                out.col[q - qs0] = std::mem::replace(&mut work.x_col[i], [0.0; 9]);
+                if !symmetric {
+                    out.row[q - qs0] = std::mem::replace(&mut work.x_row[i], [0.0; 9]);
+                }
+            }
+        }
+    }
+}
+
+/// A unit of a factorisation: the columns of one part, then their
+/// updates of the separator; or the separator's columns, with the parts'
+/// contributions (none when the ordering is not split).
+enum Job<'s, 'c> {
+    Part(
+        &'s mut Columns<'c>,
+        &'s mut Work,
+        Range<usize>,
+        &'s mut Contribution,
+    ),
+    Last(
+        &'s mut Columns<'c>,
+        &'s mut Work,
+        Range<usize>,
+        &'s [Contribution],
+    ),
+}
+
+impl Symbolic {
+    #[inline(always)]
+    fn run_generic(&self, values: &[f64], symmetric: bool, job: Job) -> Result<(), BlockLuError> {
+        match job {
+            Job::Part(cols, work, range, out) => {
+                self.factor_range(values, symmetric, cols, work, range, &[])?;
+                self.contribute(symmetric, cols, work, out);
+                Ok(())
+            }
+            Job::Last(cols, work, range, contributions) => {
+                self.factor_range(values, symmetric, cols, work, range, contributions)
+            }
+        }
+    }
+
+    /// [`Symbolic::run_generic`] compiled for AVX-512 (F and VL).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+    unsafe fn run_avx512(
+        &self,
+        values: &[f64],
+        symmetric: bool,
+        job: Job,
+    ) -> Result<(), BlockLuError> {
+        self.run_generic(values, symmetric, job)
+    }
+
+    /// [`Symbolic::run_generic`] compiled for AVX2 with FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn run_avx2(
+        &self,
+        values: &[f64],
+        symmetric: bool,
+        job: Job,
+    ) -> Result<(), BlockLuError> {
+        self.run_generic(values, symmetric, job)
+    }
+
+    /// Runs `job` compiled for the widest vectors the CPU has: the 3x3
+    /// block products are register-bound, and AVX-512's 32 vector
+    /// registers (against AVX2's 16) spill less. Rust fuses no multiply
+    /// and add on its own, so the results are the portable build's to the
+    /// bit.
+    fn run(&self, values: &[f64], symmetric: bool, job: Job) -> Result<(), BlockLuError> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            if has!("avx2") && has!("fma") && has!("avx512f") && has!("avx512vl") {
+                // SAFETY: the CPU has the features the function is compiled for.
+                return unsafe { self.run_avx512(values, symmetric, job) };
+            }
+            if has!("avx2") && has!("fma") {
+                // SAFETY: as above.
+                return unsafe { self.run_avx2(values, symmetric, job) };
+            }
+        }
+        self.run_generic(values, symmetric, job)
+    }
+}
+
+/// `c += a`.
+#[inline(always)]
+fn add(c: &mut Block, a: &Block) {
+    for (x, y) in c.iter_mut().zip(a) {
+        *x += y;
+    }
+}
+
+/// The strictly lower pattern of the Cholesky factor of a matrix with a
+/// symmetric pattern, by the elimination tree: column `j` gathers the rows
+/// `rows_of(j, ..)` pushes (its own entries below the diagonal) and those
+/// of its children. Returns `(l_ptr, l_rows)`.
+fn l_pattern(n: usize, mut rows_of: impl FnMut(usize, &mut Vec<u32>)) -> (Vec<usize>, Vec<u32>) {
+    let mut l_ptr = vec![0usize; n + 1];
+    let mut l_rows: Vec<u32> = Vec::new();
+    let mut mark = vec![NONE; n];
+    let mut child_head = vec![NONE; n];
+    let mut child_next = vec![NONE; n];
+    let mut own: Vec<u32> = Vec::new();
+    let mut list: Vec<u32> = Vec::new();
+    for j in 0..n {
+        list.clear();
+        own.clear();
+        rows_of(j, &mut own);
+        mark[j] = j as u32;
+        for &i in &own {
+            if mark[i as usize] != j as u32 {
+                mark[i as usize] = j as u32;
+                list.push(i);
+            }
+        }
+        let mut c = child_head[j];
+        while c != NONE {
+            for &i in &l_rows[l_ptr[c as usize]..l_ptr[c as usize + 1]] {
+                if mark[i as usize] != j as u32 {
+                    mark[i as usize] = j as u32;
+                    list.push(i);
+                }
+            }
+            c = child_next[c as usize];
+        }
+        list.sort_unstable();
+        l_rows.extend_from_slice(&list);
+        l_ptr[j + 1] = l_rows.len();
+        if let Some(&parent) = list.first() {
+            child_next[j] = child_head[parent as usize];
+            child_head[parent as usize] = j as u32;
+        }
+    }
+    (l_ptr, l_rows)
+}
+
+impl BlockLu {
+    /// Analyses the node graph `(node_ptr, node_rows)` (CSC, symmetric,
+    /// diagonal included, rows sorted) of a matrix whose scalar CSC values
+    /// follow [`super::pattern::SparsePattern`]'s layout: the value index
+    /// of entry `(3a + i, 3b + j)`, with `p` the position of `a` in column
+    /// `b`, is `9 ptr[b] + 3 j deg(b) + 3 (p - ptr[b]) + i`.
+    ///
+    /// The ordering is approximate minimum degree (AMD) on the node graph.
+    /// From [`SPLIT_MIN_NODES`] nodes on, the graph is also cut in two by
+    /// a level set of a breadth-first search from a peripheral node, and
+    /// AMD's order is kept within each half and the separator, which goes
+    /// last (nested dissection at the top level only). The two halves
+    /// then factorise independently, on two threads
+    /// ([`crate::par::join`]). The split is kept when it leaves the
+    /// longer of the two paths (a half, then the separator) at most 70 %
+    /// of AMD's work and adds at most 20 % to the total (the 20x20
+    /// pedestal: 2.36 M multiply–adds with AMD, 2.46 M split, of which
+    /// 1.26 M on the longer path). Whether it is split depends on the
+    /// graph alone, never on the machine, so results do not either.
+    pub fn new(node_ptr: &[usize], node_rows: &[usize]) -> Result<Self, BlockLuError> {
+        let n = node_ptr.len() - 1;
+        let (perm, perm_inv) = Self::amd_order(node_ptr, node_rows)?;
+        let mut sym = Symbolic::new(node_ptr, node_rows, perm, &perm_inv, (0, 0))?;
+        let serial = sym.flops(0..n).1;
+        let mut best = 0.7 * serial;
+        for (perm, split) in bisect(node_ptr, node_rows, &sym.perm) {
+            let mut inv = vec![0; n];
+            for (new, &old) in perm.iter().enumerate() {
+                inv[old] = new;
+            }
+            let cut = Symbolic::new(node_ptr, node_rows, perm, &inv, split)?;
+            let (a, b) = split;
+            let path = cut.flops(0..a).1.max(cut.flops(a..b).1) + cut.flops(b..n).1;
+            if path <= best && cut.flops(0..n).1 <= 1.2 * serial {
+                best = path;
+                sym = cut;
+            }
+        }
+        let nnz = sym.l_rows.len();
+        let separator = n - sym.split.1;
+        let separator_nnz = nnz - sym.l_ptr[sym.split.1];
+        let contribution = || Contribution {
+            diag: vec![[0.0; 9]; separator],
+            col: vec![[0.0; 9]; separator_nnz],
+            row: vec![[0.0; 9]; separator_nnz],
+        };
+        let split = sym.split != (0, 0);
+        Ok(Self {
+            flops: sym.flops(0..n),
             l: vec![[0.0; 9]; nnz],
             u: vec![[0.0; 9]; nnz],
             d_inv: vec![[0.0; 9]; n],
-            x_col: vec![[0.0; 9]; n],
-            x_row: vec![[0.0; 9]; n],
-            head: vec![NONE; n],
             next: vec![NONE; n],
             cursor: vec![0; n],
-            work: vec![[0.0; 3]; n],
-            flops,
+            work: Work::new(n),
+            work_b: Work::new(if split { n } else { 0 }),
+            contribution: if split {
+                [contribution(), contribution()]
+            } else {
+                [
+                    Contribution {
+                        diag: Vec::new(),
+                        col: Vec::new(),
+                        row: Vec::new(),
+                    },
+                    Contribution {
+                        diag: Vec::new(),
+                        col: Vec::new(),
+                        row: Vec::new(),
+                    },
+                ]
+            },
+            rhs: vec![[0.0; 3]; n],
+            sym,
         })
     }
 
@@ -364,12 +738,18 @@ impl BlockLu {
 
     /// Number of nodes (block rows).
     pub fn nodes(&self) -> usize {
-        self.perm.len()
+        self.sym.nodes()
     }
 
     /// Blocks stored in `L` (strictly lower; `U` has as many).
     pub fn factor_blocks(&self) -> usize {
-        self.l_rows.len()
+        self.sym.l_rows.len()
+    }
+
+    /// Whether the ordering is split in two halves that factorise on two
+    /// threads (see [`BlockLu::new`]).
+    pub fn is_split(&self) -> bool {
+        self.sym.split != (0, 0)
     }
 
     /// Multiply–adds of one numeric factorisation (symmetric values: half).
@@ -383,10 +763,13 @@ impl BlockLu {
 
     /// Bytes held by the factor and its work arrays.
     pub fn bytes(&self) -> usize {
-        let n = self.nodes();
-        (2 * self.l_rows.len() + 3 * n) * std::mem::size_of::<Block>()
-            + self.l_rows.len() * 4
-            + (self.col_src.len() + self.row_src.len()) * std::mem::size_of::<Source>()
+        let block = std::mem::size_of::<Block>();
+        let c = &self.contribution;
+        (2 * self.sym.l_rows.len() + self.nodes()) * block
+            + 2 * (self.work.x_col.len() + self.work_b.x_col.len()) * block
+            + 2 * (c[0].diag.len() + 2 * c[0].col.len()) * block
+            + self.sym.l_rows.len() * 4
+            + (self.sym.col_src.len() + self.sym.row_src.len()) * std::mem::size_of::<Source>()
     }
 
     #[inline(always)]
@@ -398,150 +781,102 @@ impl BlockLu {
     /// of [`BlockLu::new`]). With `symmetric` (the values must be), only
     /// the blocks on and below the permuted diagonal are read and the
     /// factorisation is `L D L^T`.
+    ///
+    /// A split ordering factorises its two halves on two threads, each
+    /// also summing its updates of the separator's columns, then the
+    /// separator; the sums are the same whichever thread runs a half.
+    /// The kernels run compiled for AVX-512 (F and VL) where the CPU has
+    /// it, else AVX2: the 3x3 block products are register-bound, and
+    /// AVX-512's 32 vector registers (against AVX2's 16) spill less —
+    /// median 0.44 ms instead of 0.53 ms for the pedestal's non-symmetric
+    /// Hessian (15 interleaved runs of the breakdown example, one
+    /// thread), and the portable build's 128-bit vectors are about 20 %
+    /// slower still.
     pub fn factorize(&mut self, values: &[f64], symmetric: bool) -> Result<(), BlockLuError> {
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::is_x86_feature_detected as has;
-            if has!("avx2") && has!("fma") && has!("avx512f") && has!("avx512vl") {
-                // SAFETY: the CPU has the features the function is compiled for.
-                return unsafe { self.factorize_avx512(values, symmetric) };
-            }
-            if has!("avx2") && has!("fma") {
-                // SAFETY: as above.
-                return unsafe { self.factorize_avx2(values, symmetric) };
-            }
-        }
-        self.factorize_generic(values, symmetric)
-    }
-
-    /// [`BlockLu::factorize`] compiled for AVX-512 (F and VL): the 3x3
-    /// block products are register-bound, and AVX-512's 32 vector
-    /// registers (against AVX2's 16) spill less — median 0.44 ms instead
-    /// of 0.53 ms for the pedestal's non-symmetric Hessian over 15
-    /// interleaved runs of the breakdown example (the best runs alike,
-    /// 0.36–0.37 ms). Results are bit for bit the other builds'.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
-    unsafe fn factorize_avx512(
-        &mut self,
-        values: &[f64],
-        symmetric: bool,
-    ) -> Result<(), BlockLuError> {
-        self.factorize_generic(values, symmetric)
-    }
-
-    /// [`BlockLu::factorize`] compiled for AVX2 (the portable build
-    /// targets baseline x86-64, whose 128-bit vectors leave the 3x3 block
-    /// products about 20 % slower: 0.39 ms instead of 0.48 ms for the
-    /// pedestal's Hessian). Rust does not fuse multiplies and adds on its
-    /// own, so the results are the portable build's to the bit.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn factorize_avx2(
-        &mut self,
-        values: &[f64],
-        symmetric: bool,
-    ) -> Result<(), BlockLuError> {
-        self.factorize_generic(values, symmetric)
-    }
-
-    #[inline(always)]
-    fn factorize_generic(&mut self, values: &[f64], symmetric: bool) -> Result<(), BlockLuError> {
-        let n = self.nodes();
-        self.head.fill(NONE);
-        for j in 0..n {
-            // Scatter column j (rows >= j) and row j (columns > j) of A.
-            for s in &self.col_src[self.col_src_ptr[j]..self.col_src_ptr[j + 1]] {
-                self.x_col[s.row as usize] = Self::gather(values, s);
-            }
-            if !symmetric {
-                for s in &self.row_src[self.row_src_ptr[j]..self.row_src_ptr[j + 1]] {
-                    // Block (J, I) as stored: gather gives A_JI directly.
-                    self.x_row[s.row as usize] = Self::gather(values, s);
-                }
-            }
-            let diagonal_scale = self.x_col[j].iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            // Updates from every column k < j with L_jk != 0.
-            let mut k = self.head[j];
-            while k != NONE {
-                let ku = k as usize;
-                let next_k = self.next[ku];
-                let pos = self.cursor[ku];
-                let end = self.l_ptr[ku + 1];
-                let u_kj = self.u[pos];
-                for q in pos..end {
-                    let i = self.l_rows[q] as usize;
-                    mul_acc::<true>(&mut self.x_col[i], &self.l[q], &u_kj);
-                }
-                if !symmetric {
-                    let l_jk = self.l[pos];
-                    for q in pos + 1..end {
-                        let i = self.l_rows[q] as usize;
-                        mul_acc::<true>(&mut self.x_row[i], &l_jk, &self.u[q]);
-                    }
-                }
-                // Column k's next row.
-                self.cursor[ku] = pos + 1;
-                if pos + 1 < end {
-                    let r = self.l_rows[pos + 1] as usize;
-                    self.next[ku] = self.head[r];
-                    self.head[r] = k;
-                }
-                k = next_k;
-            }
-            let d = self.x_col[j];
-            let d_scale = d.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            let d_inv = match invert(&d) {
-                Some(inv) if d_scale > 1e-10 * diagonal_scale => inv,
-                _ => {
-                    // Leave the accumulators clean for the next call.
-                    self.x_col[j] = [0.0; 9];
-                    for q in self.l_ptr[j]..self.l_ptr[j + 1] {
-                        let i = self.l_rows[q] as usize;
-                        self.x_col[i] = [0.0; 9];
-                        self.x_row[i] = [0.0; 9];
-                    }
-                    return Err(BlockLuError::Pivot { node: self.perm[j] });
-                }
+        let sym = &self.sym;
+        let n = sym.nodes();
+        let (a, b) = sym.split;
+        let (l_ptr_a, l_ptr_b) = (sym.l_ptr[a], sym.l_ptr[b]);
+        let (l_ab, l_s) = self.l.split_at_mut(l_ptr_b);
+        let (l_a, l_b) = l_ab.split_at_mut(l_ptr_a);
+        let (u_ab, u_s) = self.u.split_at_mut(l_ptr_b);
+        let (u_a, u_b) = u_ab.split_at_mut(l_ptr_a);
+        let (d_ab, d_s) = self.d_inv.split_at_mut(b);
+        let (d_a, d_b) = d_ab.split_at_mut(a);
+        let (n_ab, n_s) = self.next.split_at_mut(b);
+        let (n_a, n_b) = n_ab.split_at_mut(a);
+        let (c_ab, c_s) = self.cursor.split_at_mut(b);
+        let (c_a, c_b) = c_ab.split_at_mut(a);
+        let work = &mut self.work;
+        work.head.fill(NONE);
+        if b > 0 {
+            let work_b = &mut self.work_b;
+            work_b.head.fill(NONE);
+            let [con_a, con_b] = &mut self.contribution;
+            let mut cols_a = Columns {
+                c0: 0,
+                q0: 0,
+                l: l_a,
+                u: u_a,
+                d_inv: d_a,
+                next: n_a,
+                cursor: c_a,
             };
-            self.d_inv[j] = d_inv;
-            self.x_col[j] = [0.0; 9];
-            for q in self.l_ptr[j]..self.l_ptr[j + 1] {
-                let i = self.l_rows[q] as usize;
-                let l_ij = std::mem::replace(&mut self.x_col[i], [0.0; 9]);
-                self.u[q] = if symmetric {
-                    mul(&d_inv, &transpose(&l_ij))
-                } else {
-                    mul(&d_inv, &std::mem::replace(&mut self.x_row[i], [0.0; 9]))
-                };
-                self.l[q] = l_ij;
-            }
-            // Column j joins the list of its first row.
-            self.cursor[j] = self.l_ptr[j];
-            if self.l_ptr[j] < self.l_ptr[j + 1] {
-                let r = self.l_rows[self.l_ptr[j]] as usize;
-                self.next[j] = self.head[r];
-                self.head[r] = j as u32;
-            }
+            let mut cols_b = Columns {
+                c0: a,
+                q0: l_ptr_a,
+                l: l_b,
+                u: u_b,
+                d_inv: d_b,
+                next: n_b,
+                cursor: c_b,
+            };
+            let (ra, rb) = crate::par::join(
+                || sym.run(values, symmetric, Job::Part(&mut cols_a, work, 0..a, con_a)),
+                || {
+                    sym.run(
+                        values,
+                        symmetric,
+                        Job::Part(&mut cols_b, work_b, a..b, con_b),
+                    )
+                },
+            );
+            ra?;
+            rb?;
         }
-        Ok(())
+        let mut cols_s = Columns {
+            c0: b,
+            q0: l_ptr_b,
+            l: l_s,
+            u: u_s,
+            d_inv: d_s,
+            next: n_s,
+            cursor: c_s,
+        };
+        let contributions: &[Contribution] = if b > 0 { &self.contribution } else { &[] };
+        sym.run(
+            values,
+            symmetric,
+            Job::Last(&mut cols_s, work, b..n, contributions),
+        )
     }
 
     /// Solves `A x = b` in place (`x`: `b` in, `x` out; `3 nodes` long)
     /// with the last factorisation.
     pub fn solve_in_place(&mut self, x: &mut [f64]) {
-        let n = self.nodes();
-        let w = &mut self.work;
+        let sym = &self.sym;
+        let n = sym.nodes();
+        let w = &mut self.rhs;
         for (j, wj) in w.iter_mut().enumerate() {
-            let o = 3 * self.perm[j];
+            let o = 3 * sym.perm[j];
             *wj = [x[o], x[o + 1], x[o + 2]];
         }
         // L~ y = b, by columns.
         for j in 0..n {
             let y = mul_vec(&self.d_inv[j], &w[j]);
             w[j] = y;
-            for q in self.l_ptr[j]..self.l_ptr[j + 1] {
-                let i = self.l_rows[q] as usize;
+            for q in sym.l_ptr[j]..sym.l_ptr[j + 1] {
+                let i = sym.l_rows[q] as usize;
                 let t = mul_vec(&self.l[q], &y);
                 for c in 0..3 {
                     w[i][c] -= t[c];
@@ -551,8 +886,8 @@ impl BlockLu {
         // U x = y, by rows (U_ji stored at column j's positions).
         for j in (0..n).rev() {
             let mut s = w[j];
-            for q in self.l_ptr[j]..self.l_ptr[j + 1] {
-                let i = self.l_rows[q] as usize;
+            for q in sym.l_ptr[j]..sym.l_ptr[j + 1] {
+                let i = sym.l_rows[q] as usize;
                 let t = mul_vec(&self.u[q], &w[i]);
                 for c in 0..3 {
                     s[c] -= t[c];
@@ -561,10 +896,98 @@ impl BlockLu {
             w[j] = s;
         }
         for (j, wj) in w.iter().enumerate() {
-            let o = 3 * self.perm[j];
+            let o = 3 * sym.perm[j];
             x[o..o + 3].copy_from_slice(wj);
         }
     }
+}
+
+/// Cuts a connected node graph in two by a level set of a breadth-first
+/// search from a peripheral node (found as in George & Liu 1979: restart
+/// from a node of least degree in the last level while the number of
+/// levels grows): the level that best balances the two sides, which then
+/// share no edge. Returns the ordering — `order`'s nodes of the first
+/// side, those of the second, those of the level, each in `order`'s
+/// sequence — and the split `(a, b)`; `None` for small or disconnected
+/// graphs and when no level leaves a quarter of the nodes on each side.
+fn bisect(
+    node_ptr: &[usize],
+    node_rows: &[usize],
+    order: &[usize],
+) -> Vec<(Vec<usize>, (usize, usize))> {
+    let n = node_ptr.len() - 1;
+    if n < SPLIT_MIN_NODES {
+        return Vec::new();
+    }
+    let degree = |v: usize| node_ptr[v + 1] - node_ptr[v];
+    let mut level = vec![usize::MAX; n];
+    let mut queue = Vec::with_capacity(n);
+    let mut bfs = |root: usize, level: &mut Vec<usize>| -> usize {
+        level.fill(usize::MAX);
+        queue.clear();
+        queue.push(root);
+        level[root] = 0;
+        let mut head = 0;
+        while head < queue.len() {
+            let v = queue[head];
+            head += 1;
+            for &w in &node_rows[node_ptr[v]..node_ptr[v + 1]] {
+                if level[w] == usize::MAX {
+                    level[w] = level[v] + 1;
+                    queue.push(w);
+                }
+            }
+        }
+        queue.len()
+    };
+    let Some(mut root) = (0..n).min_by_key(|&v| degree(v)) else {
+        return Vec::new();
+    };
+    let mut depth = 0;
+    for _ in 0..8 {
+        if bfs(root, &mut level) < n {
+            return Vec::new();
+        }
+        let last = level.iter().copied().max().unwrap_or(0);
+        if last <= depth {
+            break;
+        }
+        depth = last;
+        root = (0..n)
+            .filter(|&v| level[v] == last)
+            .min_by_key(|&v| degree(v))
+            .unwrap_or(root);
+    }
+    bfs(root, &mut level);
+    let mut sizes = vec![0usize; depth + 1];
+    for &l in &level {
+        sizes[l] += 1;
+    }
+    // The levels that leave at least a quarter of the nodes on each side,
+    // best balanced first.
+    let mut below = 0;
+    let mut cuts = Vec::new();
+    for (l, &size) in sizes.iter().enumerate() {
+        let above = n - below - size;
+        if l > 0 && l < depth && below.min(above) >= n / 4 {
+            cuts.push((below.abs_diff(above), l));
+        }
+        below += size;
+    }
+    cuts.sort_unstable();
+    cuts.truncate(CUT_CANDIDATES);
+    cuts.into_iter()
+        .map(|(_, cut)| {
+            let side = |v: usize| (level[v] > cut) as usize + 2 * (level[v] == cut) as usize;
+            let mut perm = Vec::with_capacity(n);
+            for s in 0..3 {
+                perm.extend(order.iter().copied().filter(|&v| side(v) == s));
+            }
+            let a = order.iter().filter(|&&v| side(v) == 0).count();
+            let b = a + order.iter().filter(|&&v| side(v) == 1).count();
+            (perm, (a, b))
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -681,6 +1104,98 @@ mod tests {
         let mut x = b.clone();
         lu.solve_in_place(&mut x);
         assert!(residual(&p, &v, &x, &b) < 1e-12);
+    }
+
+    /// From 100 nodes on a grid's ordering is split in two halves joined
+    /// only through the separator, and the split factorisation solves
+    /// symmetric and non-symmetric systems to round-off, with results
+    /// bit for bit the same whether the halves run on two threads or one.
+    #[test]
+    fn split_factorisation_solves_and_does_not_depend_on_the_threads() {
+        for (nx, ny) in [(20, 20), (30, 14)] {
+            for (skew, symmetric) in [(0.0, true), (0.7, false)] {
+                let (p, v) = grid_matrix(nx, ny, 8.0, skew);
+                let (ptr, rows) = p.node_graph();
+                let mut lu = BlockLu::new(ptr, rows).unwrap();
+                assert!(lu.is_split(), "{nx}x{ny}");
+                // No edge between the halves: each half's columns of L
+                // reach only their own half and the separator.
+                let (a, b) = lu.sym.split;
+                for j in 0..b {
+                    for &i in &lu.sym.l_rows[lu.sym.l_ptr[j]..lu.sym.l_ptr[j + 1]] {
+                        let i = i as usize;
+                        assert!(if j < a { i < a || i >= b } else { i >= a }, "{j} -> {i}");
+                    }
+                }
+                let rhs: Vec<f64> = (0..p.dimension())
+                    .map(|i| (i as f64 * 0.37).sin())
+                    .collect();
+                let mut x = rhs.clone();
+                lu.factorize(&v, symmetric).unwrap();
+                lu.solve_in_place(&mut x);
+                let r = residual(&p, &v, &x, &rhs);
+                assert!(r < 1e-12 * max_abs(&rhs), "{nx}x{ny} skew {skew}: {r:e}");
+                // Inside a join the nested one runs both halves here.
+                let mut y = rhs.clone();
+                crate::par::join(
+                    || {
+                        lu.factorize(&v, symmetric).unwrap();
+                        lu.solve_in_place(&mut y);
+                    },
+                    || (),
+                );
+                assert_eq!(x, y);
+            }
+        }
+    }
+
+    /// A singular pivot in either half or in the separator is reported by
+    /// its node, and the next factorisation of a good matrix is right.
+    #[test]
+    fn split_factorisation_reports_a_singular_pivot_in_any_part() {
+        let (p, v) = grid_matrix(20, 20, 8.0, 0.3);
+        let (ptr, rows) = p.node_graph();
+        let mut lu = BlockLu::new(ptr, rows).unwrap();
+        let (a, b) = lu.sym.split;
+        let n = lu.nodes();
+        for column in [a / 2, (a + b) / 2, (b + n) / 2] {
+            let node = lu.sym.perm[column];
+            let mut bad = v.clone();
+            for c in 0..p.dimension() {
+                for k in p.col_ptr[c]..p.col_ptr[c + 1] {
+                    if c / 3 == node || p.row_idx[k] / 3 == node {
+                        bad[k] = 0.0;
+                    }
+                }
+            }
+            assert_eq!(lu.factorize(&bad, false), Err(BlockLuError::Pivot { node }));
+            lu.factorize(&v, false).unwrap();
+            let rhs = vec![1.0; p.dimension()];
+            let mut x = rhs.clone();
+            lu.solve_in_place(&mut x);
+            assert!(residual(&p, &v, &x, &rhs) < 1e-12);
+        }
+    }
+
+    /// A graph in two pieces is not split (no level set separates it),
+    /// nor is a small one.
+    #[test]
+    fn disconnected_and_small_graphs_are_not_split() {
+        let (p, _) = grid_matrix(20, 20, 8.0, 0.0);
+        let (ptr, rows) = p.node_graph();
+        let n = ptr.len() - 1;
+        // Two copies of the grid side by side.
+        let mut ptr2 = ptr.to_vec();
+        let mut rows2 = rows.to_vec();
+        for c in 0..n {
+            let range = ptr[c]..ptr[c + 1];
+            rows2.extend(rows[range].iter().map(|r| r + n));
+            ptr2.push(rows2.len());
+        }
+        assert!(!BlockLu::new(&ptr2, &rows2).unwrap().is_split());
+        let (p, _) = grid_matrix(6, 6, 8.0, 0.0);
+        let (ptr, rows) = p.node_graph();
+        assert!(!BlockLu::new(ptr, rows).unwrap().is_split());
     }
 
     /// The ordering reduces fill: on a 30x30 grid the factor holds fewer
