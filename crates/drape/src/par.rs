@@ -16,7 +16,8 @@
 //! done. The split of the work is the caller's, so results never depend on
 //! which thread ran what. One caller at a time uses the helper (joins
 //! from other threads, and joins nested in a join, run both closures on
-//! the calling thread), and a machine with one core has no helper.
+//! the calling thread), and a machine with one core has no helper, nor a
+//! run with `RAYON_NUM_THREADS=1`.
 
 use std::cell::UnsafeCell;
 use std::panic::{self, AssertUnwindSafe};
@@ -72,7 +73,13 @@ struct Team {
 fn team() -> Option<&'static Team> {
     static TEAM: OnceLock<Option<&'static Team>> = OnceLock::new();
     *TEAM.get_or_init(|| {
-        if thread::available_parallelism().map_or(1, |n| n.get()) < 2 {
+        // One core, or one thread asked for (as rayon reads it): no helper.
+        let threads = std::env::var("RAYON_NUM_THREADS")
+            .ok()
+            .and_then(|v| v.parse::<usize>().ok())
+            .filter(|&t| t > 0)
+            .unwrap_or_else(|| thread::available_parallelism().map_or(1, |n| n.get()));
+        if threads < 2 {
             return None;
         }
         let (tx, rx) = std::sync::mpsc::channel::<&'static Team>();
@@ -200,6 +207,17 @@ where
         (Ok(ra), Ok(rb)) => (ra, rb),
         (Err(e), _) | (_, Err(e)) => panic::resume_unwind(e),
     }
+}
+
+/// `f` over the two halves of `0..len`, the second half on the helper
+/// thread ([`join`]): `(f(0..len / 2), f(len / 2..len))`.
+pub fn halves<T, F>(len: usize, f: F) -> (T, T)
+where
+    T: Send,
+    F: Fn(std::ops::Range<usize>) -> T + Sync,
+{
+    let mid = len / 2;
+    join(|| f(0..mid), || f(mid..len))
 }
 
 #[cfg(test)]

@@ -242,7 +242,15 @@ impl ContactModel {
                     },
                 )
         } else {
-            (0..nodes).fold((Vec::new(), f64::INFINITY), visit)
+            // Two halves, the second on the helper thread (`crate::par`);
+            // the pairs stay in node order.
+            let mid = nodes / 2;
+            let ((mut pairs, a), (rest, b)) = crate::par::join(
+                || (0..mid).fold((Vec::new(), f64::INFINITY), visit),
+                || (mid..nodes).fold((Vec::new(), f64::INFINITY), visit),
+            );
+            pairs.extend(rest);
+            (pairs, a.min(b))
         };
         // A fixed order, whatever the threads did: sums over pairs are
         // then reproducible to the bit.

@@ -259,7 +259,8 @@ impl Model {
         let total = if self.parallel() {
             elements.into_par_iter().map(count).reduce(|| [0; 3], add)
         } else {
-            elements.map(count).fold([0; 3], add)
+            let (a, b) = crate::par::halves(elements.len(), |r| r.map(count).fold([0; 3], add));
+            add(a, b)
         };
         let n = self.mesh.element_count().max(1) as f64;
         total.map(|c| c as f64 / n)
@@ -295,7 +296,10 @@ impl Model {
         let per_element: Vec<([f64; 3], [f64; 2], i32)> = if self.parallel() {
             elements.into_par_iter().map(result).collect()
         } else {
-            elements.map(result).collect()
+            let (mut a, b) =
+                crate::par::halves(elements.len(), |r| r.map(result).collect::<Vec<_>>());
+            a.extend(b);
+            a
         };
         ElementResults {
             stress: per_element.iter().map(|r| r.0).collect(),
@@ -334,7 +338,10 @@ impl Model {
                 .map(least_of)
                 .reduce(|| (f64::INFINITY, 0), smaller)
         } else {
-            elements.map(least_of).fold((f64::INFINITY, 0), smaller)
+            let (a, b) = crate::par::halves(elements.len(), |r| {
+                r.map(least_of).fold((f64::INFINITY, 0), smaller)
+            });
+            smaller(a, b)
         }
     }
 }

@@ -234,7 +234,18 @@ impl Model {
         if self.parallel() {
             out.par_chunks_mut(3).enumerate().for_each(row);
         } else {
-            out.chunks_mut(3).enumerate().for_each(row);
+            // Two halves, the second on the helper thread (`crate::par`).
+            let mid = out.len() / 6;
+            let (first, second) = out.split_at_mut(3 * mid);
+            crate::par::join(
+                || first.chunks_mut(3).enumerate().for_each(row),
+                || {
+                    second
+                        .chunks_mut(3)
+                        .enumerate()
+                        .for_each(|(b, o)| row((b + mid, o)))
+                },
+            );
         }
     }
 

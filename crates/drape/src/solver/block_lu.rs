@@ -259,6 +259,8 @@ pub struct BlockLu {
     contribution: [Contribution; 2],
     /// Solve work (permuted right-hand side).
     rhs: Vec<[f64; 3]>,
+    /// The second half's updates of the separator's rows in a solve.
+    rhs_separator: Vec<[f64; 3]>,
     /// Multiply–adds of one symmetric / non-symmetric factorisation.
     flops: (f64, f64),
 }
@@ -707,6 +709,7 @@ impl BlockLu {
                 ]
             },
             rhs: vec![[0.0; 3]; n],
+            rhs_separator: vec![[0.0; 3]; if split { separator } else { 0 }],
             sym,
         })
     }
@@ -866,38 +869,106 @@ impl BlockLu {
     pub fn solve_in_place(&mut self, x: &mut [f64]) {
         let sym = &self.sym;
         let n = sym.nodes();
+        let (a, b) = sym.split;
         let w = &mut self.rhs;
         for (j, wj) in w.iter_mut().enumerate() {
             let o = 3 * sym.perm[j];
             *wj = [x[o], x[o + 1], x[o + 2]];
         }
-        // L~ y = b, by columns.
-        for j in 0..n {
-            let y = mul_vec(&self.d_inv[j], &w[j]);
-            w[j] = y;
-            for q in sym.l_ptr[j]..sym.l_ptr[j + 1] {
-                let i = sym.l_rows[q] as usize;
-                let t = mul_vec(&self.l[q], &y);
+        let (d_inv, l, u) = (&self.d_inv[..], &self.l[..], &self.u[..]);
+        // L~ y = b, by columns: the halves on two threads (the second one
+        // gathers its updates of the separator's rows apart, added after),
+        // then the separator.
+        let (w_ab, w_s) = w.split_at_mut(b);
+        let (w_a, w_b) = w_ab.split_at_mut(a);
+        if b > 0 {
+            let acc = &mut self.rhs_separator;
+            acc.fill([0.0; 3]);
+            crate::par::join(
+                || sym.forward(d_inv, l, 0..a, w_a, w_s),
+                || sym.forward(d_inv, l, a..b, w_b, acc),
+            );
+            for (wi, ai) in w_s.iter_mut().zip(acc.iter()) {
                 for c in 0..3 {
-                    w[i][c] -= t[c];
+                    wi[c] += ai[c];
                 }
             }
         }
-        // U x = y, by rows (U_ji stored at column j's positions).
-        for j in (0..n).rev() {
-            let mut s = w[j];
-            for q in sym.l_ptr[j]..sym.l_ptr[j + 1] {
-                let i = sym.l_rows[q] as usize;
-                let t = mul_vec(&self.u[q], &w[i]);
-                for c in 0..3 {
-                    s[c] -= t[c];
-                }
-            }
-            w[j] = s;
+        sym.forward(d_inv, l, b..n, w_s, &mut []);
+        // U x = y, by rows: the separator, then the halves on two threads.
+        sym.backward(u, b..n, w_s, &[]);
+        if b > 0 {
+            let w_s = &*w_s;
+            crate::par::join(
+                || sym.backward(u, 0..a, w_a, w_s),
+                || sym.backward(u, a..b, w_b, w_s),
+            );
         }
         for (j, wj) in w.iter().enumerate() {
             let o = 3 * sym.perm[j];
             x[o..o + 3].copy_from_slice(wj);
+        }
+    }
+}
+
+impl Symbolic {
+    /// Forward substitution over the columns `cols`, whose entries are
+    /// `own` (from `cols.start`): `y_j = D_j^-1 w_j`, then `w_i -= L~_ij
+    /// y_j` below, into `separator` (from row `split.1`) for the
+    /// separator's rows.
+    fn forward(
+        &self,
+        d_inv: &[Block],
+        l: &[Block],
+        cols: Range<usize>,
+        own: &mut [[f64; 3]],
+        separator: &mut [[f64; 3]],
+    ) {
+        let (c0, s0) = (cols.start, self.split.1.max(cols.start));
+        for j in cols {
+            let y = mul_vec(&d_inv[j], &own[j - c0]);
+            own[j - c0] = y;
+            for q in self.l_ptr[j]..self.l_ptr[j + 1] {
+                let i = self.l_rows[q] as usize;
+                let t = mul_vec(&l[q], &y);
+                let wi = if i >= s0 && s0 > c0 {
+                    &mut separator[i - s0]
+                } else {
+                    &mut own[i - c0]
+                };
+                for c in 0..3 {
+                    wi[c] -= t[c];
+                }
+            }
+        }
+    }
+
+    /// Backward substitution over the rows `rows` (descending), whose
+    /// entries are `own` (from `rows.start`), reading the separator's
+    /// solved entries from `separator` (from row `split.1`).
+    fn backward(
+        &self,
+        u: &[Block],
+        rows: Range<usize>,
+        own: &mut [[f64; 3]],
+        separator: &[[f64; 3]],
+    ) {
+        let (c0, s0) = (rows.start, self.split.1.max(rows.start));
+        for j in rows.rev() {
+            let mut s = own[j - c0];
+            for q in self.l_ptr[j]..self.l_ptr[j + 1] {
+                let i = self.l_rows[q] as usize;
+                let wi = if i >= s0 && s0 > c0 {
+                    &separator[i - s0]
+                } else {
+                    &own[i - c0]
+                };
+                let t = mul_vec(&u[q], wi);
+                for c in 0..3 {
+                    s[c] -= t[c];
+                }
+            }
+            own[j - c0] = s;
         }
     }
 }
