@@ -195,21 +195,67 @@ struct Symbolic {
     split: (usize, usize),
 }
 
+/// A 3x3 block padded to four rows, stored by columns: entry `(r, c)` at
+/// `4 c + r`, the fourth row zero. A column is then one 256-bit vector
+/// and two columns one 512-bit vector: the block products of the
+/// factorisation run as three broadcasts and six fused multiply–adds per
+/// block (`sub_product`), against nine multiplies of three-wide vectors
+/// and their shuffles for a 3x3 row-major block. The factor's `U` blocks
+/// and the row accumulators hold the transpose (entry `(r, c)` at
+/// `4 r + c`), so that the row updates are the same product.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C, align(32))]
+struct Padded([f64; 12]);
+
+const ZERO: Padded = Padded([0.0; 12]);
+
+impl Padded {
+    /// From a row-major block, by columns (`transposed`: its transpose).
+    #[inline(always)]
+    fn new(m: &Block, transposed: bool) -> Self {
+        let mut p = ZERO;
+        for r in 0..3 {
+            for c in 0..3 {
+                let (i, j) = if transposed { (c, r) } else { (r, c) };
+                p.0[4 * j + i] = m[3 * r + c];
+            }
+        }
+        p
+    }
+
+    /// The row-major block (`transposed`: of the transpose).
+    #[inline(always)]
+    fn block(&self, transposed: bool) -> Block {
+        let mut m = [0.0; 9];
+        for r in 0..3 {
+            for c in 0..3 {
+                let (i, j) = if transposed { (c, r) } else { (r, c) };
+                m[3 * r + c] = self.0[4 * j + i];
+            }
+        }
+        m
+    }
+
+    fn max_abs(&self) -> f64 {
+        self.0.iter().fold(0.0f64, |a, v| a.max(v.abs()))
+    }
+}
+
 /// The accumulators of one thread: a column and a row of the active
 /// submatrix, and the linked lists of the columns `k` whose next row is
 /// `j` (`head[j]`).
 #[derive(Debug, Clone)]
 struct Work {
-    x_col: Vec<Block>,
-    x_row: Vec<Block>,
+    x_col: Vec<Padded>,
+    x_row: Vec<Padded>,
     head: Vec<u32>,
 }
 
 impl Work {
     fn new(n: usize) -> Self {
         Self {
-            x_col: vec![[0.0; 9]; n],
-            x_row: vec![[0.0; 9]; n],
+            x_col: vec![ZERO; n],
+            x_row: vec![ZERO; n],
             head: vec![NONE; n],
         }
     }
@@ -220,9 +266,9 @@ impl Work {
 /// `L`'s separator columns.
 #[derive(Debug, Clone)]
 struct Contribution {
-    diag: Vec<Block>,
-    col: Vec<Block>,
-    row: Vec<Block>,
+    diag: Vec<Padded>,
+    col: Vec<Padded>,
+    row: Vec<Padded>,
 }
 
 /// The numeric arrays of a range of columns (`c0..`, whose entries of `L`
@@ -230,8 +276,8 @@ struct Contribution {
 struct Columns<'a> {
     c0: usize,
     q0: usize,
-    l: &'a mut [Block],
-    u: &'a mut [Block],
+    l: &'a mut [Padded],
+    u: &'a mut [Padded],
     d_inv: &'a mut [Block],
     next: &'a mut [u32],
     cursor: &'a mut [usize],
@@ -242,9 +288,10 @@ struct Columns<'a> {
 pub struct BlockLu {
     sym: Symbolic,
     /// `L~_ij` by position in `l_rows`.
-    l: Vec<Block>,
-    /// `U_ji` (row `j`, column `i = l_rows[q]`) by position `q`.
-    u: Vec<Block>,
+    l: Vec<Padded>,
+    /// `U_ji` (row `j`, column `i = l_rows[q]`) by position `q`, stored
+    /// transposed (see [`Padded`]).
+    u: Vec<Padded>,
     /// `D_j^-1`.
     d_inv: Vec<Block>,
     /// Per column `k`: the next entry of `L` to use, and the next column
@@ -371,7 +418,13 @@ impl Symbolic {
     /// from the columns `k` in `work.head[j]` — all of `cols`' range —
     /// and moves each `k` on to the list of its next row.
     #[inline(always)]
-    fn update(&self, cols: &mut Columns, work: &mut Work, j: usize, symmetric: bool) {
+    fn update<const WIDE: bool>(
+        &self,
+        cols: &mut Columns,
+        work: &mut Work,
+        j: usize,
+        symmetric: bool,
+    ) {
         let (c0, q0) = (cols.c0, cols.q0);
         let mut k = work.head[j];
         while k != NONE {
@@ -379,17 +432,14 @@ impl Symbolic {
             let next_k = cols.next[ku - c0];
             let pos = cols.cursor[ku - c0];
             let end = self.l_ptr[ku + 1];
-            let u_kj = cols.u[pos - q0];
             let rows = &self.l_rows[pos..end];
-            column_update(&mut work.x_col, rows, &cols.l[pos - q0..end - q0], &u_kj);
+            // x_col[i] -= L~_ik U_kj, and x_row[i]^T -= U_ki^T L~_jk^T.
+            let u_kj = cols.u[pos - q0];
+            updates::<WIDE>(&mut work.x_col, rows, &cols.l[pos - q0..end - q0], &u_kj);
             if !symmetric {
                 let l_jk = cols.l[pos - q0];
-                row_update(
-                    &mut work.x_row,
-                    &rows[1..],
-                    &l_jk,
-                    &cols.u[pos + 1 - q0..end - q0],
-                );
+                let u_k = &cols.u[pos + 1 - q0..end - q0];
+                updates::<WIDE>(&mut work.x_row, &rows[1..], u_k, &l_jk);
             }
             // Column k's next row.
             cols.cursor[ku - c0] = pos + 1;
@@ -406,7 +456,7 @@ impl Symbolic {
     /// recurrence of the module docs, with the updates from the columns in
     /// `work`'s lists and, for the separator, the parts' `contributions`.
     #[inline(always)]
-    fn factor_range(
+    fn factor_range<const WIDE: bool>(
         &self,
         values: &[f64],
         symmetric: bool,
@@ -420,15 +470,15 @@ impl Symbolic {
         for j in range {
             // Scatter column j (rows >= j) and row j (columns > j) of A.
             for s in &self.col_src[self.col_src_ptr[j]..self.col_src_ptr[j + 1]] {
-                work.x_col[s.row as usize] = BlockLu::gather(values, s);
+                work.x_col[s.row as usize] = Padded::new(&BlockLu::gather(values, s), false);
             }
             if !symmetric {
                 for s in &self.row_src[self.row_src_ptr[j]..self.row_src_ptr[j + 1]] {
                     // Block (J, I) as stored: gather gives A_JI directly.
-                    work.x_row[s.row as usize] = BlockLu::gather(values, s);
+                    work.x_row[s.row as usize] = Padded::new(&BlockLu::gather(values, s), true);
                 }
             }
-            let diagonal_scale = work.x_col[j].iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let diagonal_scale = work.x_col[j].max_abs();
             for c in contributions {
                 add(&mut work.x_col[j], &c.diag[j - s0]);
                 for q in self.l_ptr[j]..self.l_ptr[j + 1] {
@@ -439,32 +489,34 @@ impl Symbolic {
                     }
                 }
             }
-            self.update(cols, work, j, symmetric);
-            let d = work.x_col[j];
+            self.update::<WIDE>(cols, work, j, symmetric);
+            let d = work.x_col[j].block(false);
             let d_scale = d.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             let d_inv = match invert(&d) {
                 Some(inv) if d_scale > 1e-10 * diagonal_scale => inv,
                 _ => {
                     // Leave the accumulators clean for the next call.
-                    work.x_col[j] = [0.0; 9];
+                    work.x_col[j] = ZERO;
                     for q in self.l_ptr[j]..self.l_ptr[j + 1] {
                         let i = self.l_rows[q] as usize;
-                        work.x_col[i] = [0.0; 9];
-                        work.x_row[i] = [0.0; 9];
+                        work.x_col[i] = ZERO;
+                        work.x_row[i] = ZERO;
                     }
                     return Err(BlockLuError::Pivot { node: self.perm[j] });
                 }
             };
             cols.d_inv[j - c0] = d_inv;
-            work.x_col[j] = [0.0; 9];
+            work.x_col[j] = ZERO;
             for q in self.l_ptr[j]..self.l_ptr[j + 1] {
                 let i = self.l_rows[q] as usize;
-                let l_ij = std::mem::replace(&mut work.x_col[i], [0.0; 9]);
-                cols.u[q - q0] = if symmetric {
-                    mul(&d_inv, &transpose(&l_ij))
+                let l_ij = std::mem::replace(&mut work.x_col[i], ZERO);
+                // U_ji = D_j^-1 (L~_ij^T if symmetric, else A_ji - ...).
+                let rhs = if symmetric {
+                    l_ij.block(true)
                 } else {
-                    mul(&d_inv, &std::mem::replace(&mut work.x_row[i], [0.0; 9]))
+                    std::mem::replace(&mut work.x_row[i], ZERO).block(true)
                 };
+                cols.u[q - q0] = Padded::new(&mul(&d_inv, &rhs), true);
                 cols.l[q - q0] = l_ij;
             }
             // Column j joins the list of its first row.
@@ -482,7 +534,7 @@ impl Symbolic {
     /// separator's columns, gathered into `out` (the accumulators are left
     /// clean and the lists empty).
     #[inline(always)]
-    fn contribute(
+    fn contribute<const WIDE: bool>(
         &self,
         symmetric: bool,
         cols: &mut Columns,
@@ -491,14 +543,14 @@ impl Symbolic {
     ) {
         let (s0, qs0) = (self.split.1, self.l_ptr[self.split.1]);
         for j in s0..self.nodes() {
-            self.update(cols, work, j, symmetric);
+            self.update::<WIDE>(cols, work, j, symmetric);
             work.head[j] = NONE;
-            out.diag[j - s0] = std::mem::replace(&mut work.x_col[j], [0.0; 9]);
+            out.diag[j - s0] = std::mem::replace(&mut work.x_col[j], ZERO);
             for q in self.l_ptr[j]..self.l_ptr[j + 1] {
                 let i = self.l_rows[q] as usize;
-                out.col[q - qs0] = std::mem::replace(&mut work.x_col[i], [0.0; 9]);
+                out.col[q - qs0] = std::mem::replace(&mut work.x_col[i], ZERO);
                 if !symmetric {
-                    out.row[q - qs0] = std::mem::replace(&mut work.x_row[i], [0.0; 9]);
+                    out.row[q - qs0] = std::mem::replace(&mut work.x_row[i], ZERO);
                 }
             }
         }
@@ -524,16 +576,23 @@ enum Job<'s, 'c> {
 }
 
 impl Symbolic {
+    /// Runs `job`; `WIDE`: with the AVX-512 block product (only where
+    /// the CPU has AVX-512 F and VL).
     #[inline(always)]
-    fn run_generic(&self, values: &[f64], symmetric: bool, job: Job) -> Result<(), BlockLuError> {
+    fn run_generic<const WIDE: bool>(
+        &self,
+        values: &[f64],
+        symmetric: bool,
+        job: Job,
+    ) -> Result<(), BlockLuError> {
         match job {
             Job::Part(cols, work, range, out) => {
-                self.factor_range(values, symmetric, cols, work, range, &[])?;
-                self.contribute(symmetric, cols, work, out);
+                self.factor_range::<WIDE>(values, symmetric, cols, work, range, &[])?;
+                self.contribute::<WIDE>(symmetric, cols, work, out);
                 Ok(())
             }
             Job::Last(cols, work, range, contributions) => {
-                self.factor_range(values, symmetric, cols, work, range, contributions)
+                self.factor_range::<WIDE>(values, symmetric, cols, work, range, contributions)
             }
         }
     }
@@ -547,7 +606,7 @@ impl Symbolic {
         symmetric: bool,
         job: Job,
     ) -> Result<(), BlockLuError> {
-        self.run_generic(values, symmetric, job)
+        self.run_generic::<true>(values, symmetric, job)
     }
 
     /// [`Symbolic::run_generic`] compiled for AVX2 with FMA.
@@ -559,15 +618,19 @@ impl Symbolic {
         symmetric: bool,
         job: Job,
     ) -> Result<(), BlockLuError> {
-        self.run_generic(values, symmetric, job)
+        self.run_generic::<false>(values, symmetric, job)
     }
 
-    /// Runs `job` compiled for the widest vectors the CPU has: the 3x3
-    /// block products are register-bound, and AVX-512's 32 vector
-    /// registers (against AVX2's 16) spill less. Rust fuses no multiply
-    /// and add on its own, so the results are the portable build's to the
-    /// bit.
+    /// Runs `job` compiled for the widest vectors the CPU has. Every
+    /// build computes each entry by the same fused multiply–adds in the
+    /// same order (the portable one through the C library's `fma`, on
+    /// CPUs without AVX2 and FMA), so the results do not depend on the
+    /// build.
     fn run(&self, values: &[f64], symmetric: bool, job: Job) -> Result<(), BlockLuError> {
+        #[cfg(test)]
+        if tests::PORTABLE.with(|p| p.get()) {
+            return self.run_generic::<false>(values, symmetric, job);
+        }
         #[cfg(target_arch = "x86_64")]
         {
             use std::arch::is_x86_feature_detected as has;
@@ -580,48 +643,81 @@ impl Symbolic {
                 return unsafe { self.run_avx2(values, symmetric, job) };
             }
         }
-        self.run_generic(values, symmetric, job)
+        self.run_generic::<false>(values, symmetric, job)
     }
 }
 
-/// `c -= a b` with fused multiply–adds: only for code compiled with the
-/// `fma` target feature ([`Symbolic::run`]'s AVX2 and AVX-512 builds),
-/// where each is one instruction (elsewhere `mul_add` calls the C
-/// library's `fma`).
+/// `x[rows[q]] -= a[q] b` for every `q`, in [`Padded`] blocks: `x` and
+/// `a` by columns, `b` transposed (entry `(k, c)` of the factor `B` at
+/// `4 k + c`). Each entry is `c - a_0 b_0 - a_1 b_1 - a_2 b_2`, by fused
+/// multiply–adds in that order. `WIDE`: by AVX-512 intrinsics (the CPU
+/// must have AVX-512 F and VL); else by `f64::mul_add`, which is one
+/// instruction in code compiled with the `fma` feature ([`Symbolic::run`]'s
+/// AVX2 build). (Slices as arguments tell the compiler that `x` aliases
+/// neither `a` nor `rows`.)
 #[inline(always)]
-fn mul_sub_fused(c: &mut Block, a: &Block, b: &Block) {
-    for r in 0..3 {
-        for k in 0..3 {
-            let s = -a[3 * r + k];
-            for q in 0..3 {
-                c[3 * r + q] = s.mul_add(b[3 * k + q], c[3 * r + q]);
+fn updates<const WIDE: bool>(x: &mut [Padded], rows: &[u32], a: &[Padded], b: &Padded) {
+    #[cfg(target_arch = "x86_64")]
+    if WIDE {
+        // SAFETY: `WIDE` is only set in `Symbolic::run_avx512`, called
+        // where the CPU has the features.
+        unsafe { updates_avx512(x, rows, a, b) };
+        return;
+    }
+    for (&i, a) in rows.iter().zip(a) {
+        let c = &mut x[i as usize].0;
+        for q in 0..3 {
+            for k in 0..3 {
+                let bkq = b.0[4 * k + q];
+                for r in 0..3 {
+                    c[4 * q + r] = (-a.0[4 * k + r]).mul_add(bkq, c[4 * q + r]);
+                }
             }
         }
     }
 }
 
-/// `x[rows[q]] -= l[q] u` for every `q`: the updates of a column by
-/// one earlier column. (Slices as arguments tell the compiler that `x`
-/// aliases neither `l` nor `rows`.)
-#[inline(always)]
-fn column_update(x: &mut [Block], rows: &[u32], l: &[Block], u: &Block) {
-    for (&i, a) in rows.iter().zip(l) {
-        mul_sub_fused(&mut x[i as usize], a, u);
+/// [`updates`] by AVX-512: columns 0 and 1 of a target block in one
+/// 512-bit vector, column 2 in a 256-bit one; per `k`, column `k` of `a`
+/// broadcast to both halves and multiplied by `b_k0` (low half), `b_k1`
+/// (high half) and `b_k2`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+#[inline]
+unsafe fn updates_avx512(x: &mut [Padded], rows: &[u32], a: &[Padded], b: &Padded) {
+    use std::arch::x86_64::*;
+    let mut b01 = [_mm512_setzero_pd(); 3];
+    let mut b2 = [_mm256_setzero_pd(); 3];
+    for k in 0..3 {
+        let lo = _mm256_set1_pd(b.0[4 * k]);
+        let hi = _mm256_set1_pd(b.0[4 * k + 1]);
+        b01[k] = _mm512_insertf64x4::<1>(_mm512_castpd256_pd512(lo), hi);
+        b2[k] = _mm256_set1_pd(b.0[4 * k + 2]);
     }
-}
-
-/// `x[rows[q]] -= a u[q]` for every `q`: the updates of a row by one
-/// earlier row.
-#[inline(always)]
-fn row_update(x: &mut [Block], rows: &[u32], a: &Block, u: &[Block]) {
-    for (&i, b) in rows.iter().zip(u) {
-        mul_sub_fused(&mut x[i as usize], a, b);
+    for (&i, a) in rows.iter().zip(a) {
+        let c = &mut x[i as usize].0;
+        // SAFETY: `c` and `a.0` hold 12 doubles: loads and stores of 8
+        // from 0 and of 4 from 8 (and 4 from 4 k) stay inside.
+        unsafe {
+            let cp = c.as_mut_ptr();
+            let ap = a.0.as_ptr();
+            let mut c01 = _mm512_loadu_pd(cp);
+            let mut c2 = _mm256_loadu_pd(cp.add(8));
+            for k in 0..3 {
+                let ak = _mm256_loadu_pd(ap.add(4 * k));
+                c01 = _mm512_fnmadd_pd(_mm512_broadcast_f64x4(ak), b01[k], c01);
+                c2 = _mm256_fnmadd_pd(ak, b2[k], c2);
+            }
+            _mm512_storeu_pd(cp, c01);
+            _mm256_storeu_pd(cp.add(8), c2);
+        }
     }
 }
 
 /// `c += a`.
 #[inline(always)]
-fn add(c: &mut Block, a: &Block) {
+fn add(c: &mut Padded, a: &Padded) {
+    let (c, a) = (&mut c.0, &a.0);
     for (x, y) in c.iter_mut().zip(a) {
         *x += y;
     }
@@ -713,15 +809,15 @@ impl BlockLu {
         let separator = n - sym.split.1;
         let separator_nnz = nnz - sym.l_ptr[sym.split.1];
         let contribution = || Contribution {
-            diag: vec![[0.0; 9]; separator],
-            col: vec![[0.0; 9]; separator_nnz],
-            row: vec![[0.0; 9]; separator_nnz],
+            diag: vec![ZERO; separator],
+            col: vec![ZERO; separator_nnz],
+            row: vec![ZERO; separator_nnz],
         };
         let split = sym.split != (0, 0);
         Ok(Self {
             flops: sym.flops(0..n),
-            l: vec![[0.0; 9]; nnz],
-            u: vec![[0.0; 9]; nnz],
+            l: vec![ZERO; nnz],
+            u: vec![ZERO; nnz],
             d_inv: vec![[0.0; 9]; n],
             next: vec![NONE; n],
             cursor: vec![0; n],
@@ -801,11 +897,12 @@ impl BlockLu {
 
     /// Bytes held by the factor and its work arrays.
     pub fn bytes(&self) -> usize {
-        let block = std::mem::size_of::<Block>();
+        let (block, padded) = (std::mem::size_of::<Block>(), std::mem::size_of::<Padded>());
         let c = &self.contribution;
-        (2 * self.sym.l_rows.len() + self.nodes()) * block
-            + 2 * (self.work.x_col.len() + self.work_b.x_col.len()) * block
-            + 2 * (c[0].diag.len() + 2 * c[0].col.len()) * block
+        2 * self.sym.l_rows.len() * padded
+            + self.nodes() * block
+            + 2 * (self.work.x_col.len() + self.work_b.x_col.len()) * padded
+            + 2 * (c[0].diag.len() + 2 * c[0].col.len()) * padded
             + self.sym.l_rows.len() * 4
             + (self.sym.col_src.len() + self.sym.row_src.len()) * std::mem::size_of::<Source>()
     }
@@ -954,7 +1051,7 @@ impl Symbolic {
     fn forward(
         &self,
         d_inv: &[Block],
-        l: &[Block],
+        l: &[Padded],
         cols: Range<usize>,
         own: &mut [[f64; 3]],
         separator: &mut [[f64; 3]],
@@ -965,7 +1062,10 @@ impl Symbolic {
             own[j - c0] = y;
             for q in self.l_ptr[j]..self.l_ptr[j + 1] {
                 let i = self.l_rows[q] as usize;
-                let t = mul_vec(&l[q], &y);
+                // L~_ij y, L~_ij by columns.
+                let a = &l[q].0;
+                let t: [f64; 3] =
+                    std::array::from_fn(|r| a[r] * y[0] + a[4 + r] * y[1] + a[8 + r] * y[2]);
                 let wi = if i >= s0 && s0 > c0 {
                     &mut separator[i - s0]
                 } else {
@@ -983,7 +1083,7 @@ impl Symbolic {
     /// solved entries from `separator` (from row `split.1`).
     fn backward(
         &self,
-        u: &[Block],
+        u: &[Padded],
         rows: Range<usize>,
         own: &mut [[f64; 3]],
         separator: &[[f64; 3]],
@@ -998,7 +1098,11 @@ impl Symbolic {
                 } else {
                     &own[i - c0]
                 };
-                let t = mul_vec(&u[q], wi);
+                // U_ji w_i, U_ji stored transposed (by rows).
+                let b = &u[q].0;
+                let t: [f64; 3] = std::array::from_fn(|r| {
+                    b[4 * r] * wi[0] + b[4 * r + 1] * wi[1] + b[4 * r + 2] * wi[2]
+                });
                 for c in 0..3 {
                     s[c] -= t[c];
                 }
@@ -1099,6 +1203,32 @@ fn bisect(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    thread_local! {
+        /// Runs the factorisations of this thread by the portable code.
+        pub(super) static PORTABLE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+
+    /// The AVX-512 and AVX2 builds of the factorisation (where the CPU
+    /// has them) and the portable one give the same factor to the bit.
+    #[test]
+    fn every_build_gives_the_same_factor() {
+        for (skew, symmetric) in [(0.0, true), (0.6, false)] {
+            let (p, v) = grid_matrix(20, 20, 8.0, skew);
+            let (ptr, rows) = p.node_graph();
+            let mut lu = BlockLu::new(ptr, rows).unwrap();
+            // (One thread: the helper does not see this thread's flag.)
+            let factor = |lu: &mut BlockLu, portable: bool| {
+                PORTABLE.with(|f| f.set(portable));
+                crate::par::join(|| lu.factorize(&v, symmetric).unwrap(), || ());
+                PORTABLE.with(|f| f.set(false));
+                (lu.l.clone(), lu.u.clone(), lu.d_inv.clone())
+            };
+            let fast = factor(&mut lu, false);
+            let portable = factor(&mut lu, true);
+            assert!(fast == portable, "skew {skew}");
+        }
+    }
     use crate::solver::pattern::SparsePattern;
 
     /// A node grid of `nx x ny` squares cut into triangles, its pattern and
