@@ -166,15 +166,17 @@ impl Model {
                         }
                     }
                     if want_h {
-                        let blocks = &self.element_blocks[e * n * n..(e + 1) * n * n];
-                        for a in 0..n {
-                            for (b, &node_b) in el.iter().enumerate() {
-                                let (base, stride) =
-                                    self.pattern.block_layout(blocks[a * n + b], node_b);
-                                for i in 0..3 {
-                                    let row = (3 * a + i) * m + 3 * b;
-                                    for j in 0..3 {
-                                        h_ptr.add(base + j * stride + i, local.k[row + j]);
+                        let bases = &self.element_blocks[e * n * n..(e + 1) * n * n];
+                        let k = &local.k[..m * m];
+                        for (b, &node_b) in el.iter().enumerate() {
+                            // Block (a, b), entry (i, j): at base + j stride + i.
+                            let stride = self.pattern.block_layout(0, node_b).1;
+                            for a in 0..n {
+                                let base = bases[a * n + b];
+                                for j in 0..3 {
+                                    let column = base + j * stride;
+                                    for i in 0..3 {
+                                        h_ptr.add(column + i, k[(3 * a + i) * m + 3 * b + j]);
                                     }
                                 }
                             }

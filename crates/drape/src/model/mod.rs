@@ -44,7 +44,10 @@ pub struct Model {
     pub mass_kind: MassKind,
     /// Sparsity pattern of the Hessian.
     pub pattern: SparsePattern,
-    /// Node-graph positions of the element blocks (see [`SparsePattern::element_blocks`]).
+    /// Where the element blocks start in the Hessian's values: for block
+    /// `(a, b)` of element `e`, at `n^2 e + n a + b`, the value index of
+    /// its entry (0, 0) ([`SparsePattern::block_layout`] of its node-graph
+    /// position, [`SparsePattern::element_blocks`]).
     element_blocks: Vec<usize>,
     /// Element lists that share no node (parallel assembly).
     colours: Vec<Vec<usize>>,
@@ -95,7 +98,17 @@ impl Model {
         let p = mesh.order.degree();
         let geometry = ElementGeometry::new(&mesh, &QuadratureRule::of_degree(4 * (p - 1)));
         let pattern = SparsePattern::new(mesh.node_count(), mesh.elements());
-        let element_blocks = pattern.element_blocks(mesh.elements());
+        let element_blocks = {
+            let n = mesh.order.nodes_per_element();
+            let positions = pattern.element_blocks(mesh.elements());
+            mesh.elements()
+                .zip(positions.chunks(n * n))
+                .flat_map(|(el, p)| {
+                    (0..n * n).map(move |ab| (p[ab], el[ab % n]))
+                })
+                .map(|(p, b)| pattern.block_layout(p, b).0)
+                .collect()
+        };
         let colours = colour_elements(mesh.node_count(), mesh.elements());
         let mass = mass::assemble_mass(&mesh, &pattern, density * section.thickness, mass_kind)?;
         let area_weights = mass::area_weights(&mesh);
