@@ -103,9 +103,7 @@ impl Model {
             let positions = pattern.element_blocks(mesh.elements());
             mesh.elements()
                 .zip(positions.chunks(n * n))
-                .flat_map(|(el, p)| {
-                    (0..n * n).map(move |ab| (p[ab], el[ab % n]))
-                })
+                .flat_map(|(el, p)| (0..n * n).map(move |ab| (p[ab], el[ab % n])))
                 .map(|(p, b)| pattern.block_layout(p, b).0)
                 .collect()
         };

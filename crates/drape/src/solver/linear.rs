@@ -852,6 +852,23 @@ impl LinearSolver {
                 });
             return;
         }
+        if let Some(transpose) = self.transpose.as_deref() {
+            // Two halves of the rows, the second on the helper thread.
+            let n = self.dimension();
+            let (first, second) = out[..n].split_at_mut(n / 2);
+            let rows = |out: &mut [f64], start: usize| {
+                for (o, c) in out.iter_mut().zip(start..) {
+                    let range = col_ptr[c]..col_ptr[c + 1];
+                    let mut s = 0.0;
+                    for (&t, &r) in transpose[range.clone()].iter().zip(&row_idx[range]) {
+                        s += values[t] * x[r];
+                    }
+                    *o = s;
+                }
+            };
+            crate::par::join(|| rows(first, 0), || rows(second, n / 2));
+            return;
+        }
         out.fill(0.0);
         for (c, &xc) in x.iter().enumerate().take(self.dimension()) {
             if xc != 0.0 {

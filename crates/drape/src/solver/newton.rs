@@ -26,7 +26,8 @@
 //! two. A trial the line search shortens is evaluated for its residual only.
 //!
 //! After a full Newton step that shrank the increment at least fourfold
-//! or the residual at least a hundredfold, up to
+//! (from the second Newton step of a time step on) or the residual at
+//! least a hundredfold, up to
 //! [`NewtonSettings::chord_steps`] chord steps reuse its factorisation
 //! (the function `chord_steps`); the convergence test is the same for
 //! either kind of increment.
@@ -253,7 +254,8 @@ pub fn solve(
         let previous = increment;
         let previous_residual = residual;
         let full_increment = norm(&ws.dy) / length;
-        let chord_ahead = settings.chord_steps > 0 && full_increment <= 0.25 * previous;
+        let chord_ahead =
+            settings.chord_steps > 0 && previous.is_finite() && full_increment <= 0.25 * previous;
         // A full step whose increment is above the tolerance cannot end
         // the iteration: the next iteration needs the Hessian at the trial
         // point, so it is assembled with the trial's residual (one element
@@ -296,9 +298,16 @@ pub fn solve(
         // states or contacts switched between the first iterates, the
         // second increment is only a few times smaller than the first,
         // yet the residual falls by orders of magnitude and the next
-        // increment is at the tolerance.
+        // increment is at the tolerance. A step's first Newton step has
+        // no step before it, so only the residual test applies to it
+        // (an infinite "step before" once let chord steps follow every
+        // first iteration: on the pedestal 420 of 1,023 chord solves were
+        // such attempts, rejected at once, each after a trial evaluated
+        // without its Hessian and then again with it; 1,230 Newton
+        // iterations then, 1,179 now).
         if alpha == 1.0
-            && (increment <= 0.25 * previous || residual <= 0.01 * previous_residual)
+            && ((previous.is_finite() && increment <= 0.25 * previous)
+                || residual <= 0.01 * previous_residual)
             && chord_steps(
                 system,
                 y,

@@ -187,7 +187,12 @@ impl SparsePattern {
     /// entry ([`SparsePattern::asymmetry`] `<= tolerance`), stopping at the
     /// first entry that is not.
     pub fn is_symmetric(&self, values: &[f64], tolerance: f64) -> bool {
-        let max = values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        // (A comparison rather than `f64::max`, whose NaN rule keeps the
+        // loop from vectorising: this runs at every Hessian evaluation. A
+        // NaN entry then fails the test below.)
+        let max = values
+            .iter()
+            .fold(0.0f64, |a, v| if v.abs() > a { v.abs() } else { a });
         let bound = tolerance * max;
         values
             .iter()
