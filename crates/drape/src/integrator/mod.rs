@@ -87,17 +87,28 @@ impl NewtonSystem for StepSystem<'_> {
         let mut h = h;
         self.strain_energy =
             model.assemble(y, self.pressure, self.f_int, self.f_ext, h.as_deref_mut());
-        let mut scale = norm(self.f_int) + norm(self.f_ext);
+        let mut scale;
         if self.c != 0.0 {
             model.mass_times(y, self.my);
+            // G and the norms of its four terms in one pass (each sum of
+            // squares in index order, as `norm` takes it).
+            let mut squares = [0.0; 4];
             for i in 0..g.len() {
-                g[i] = self.f_int[i] - self.f_ext[i] + self.c * self.my[i] - self.mq[i];
+                let (fi, fe, my, mq) = (self.f_int[i], self.f_ext[i], self.my[i], self.mq[i]);
+                g[i] = fi - fe + self.c * my - mq;
+                squares[0] += fi * fi;
+                squares[1] += fe * fe;
+                squares[2] += my * my;
+                squares[3] += mq * mq;
             }
-            scale += self.c * norm(self.my) + norm(self.mq);
+            let [a, b, m, q] = squares.map(f64::sqrt);
+            scale = a + b;
+            scale += self.c * m + q;
             if let Some(h) = h.as_deref_mut() {
                 model.add_mass_to_hessian(self.c, h);
             }
         } else {
+            scale = norm(self.f_int) + norm(self.f_ext);
             for i in 0..g.len() {
                 g[i] = self.f_int[i] - self.f_ext[i];
             }

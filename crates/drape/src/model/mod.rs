@@ -273,13 +273,26 @@ impl Model {
     /// Adds `c M` to Hessian values on the pattern.
     pub fn add_mass_to_hessian(&self, c: f64, h: &mut [f64]) {
         let (ptr, _) = self.pattern.node_graph();
-        for b in 0..self.mesh.node_count() {
-            for p in ptr[b]..ptr[b + 1] {
-                let m = c * self.mass[p];
-                for i in 0..3 {
-                    h[self.pattern.entry(p, b, i, i)] += m;
+        let nodes = self.mesh.node_count();
+        // Node column b's blocks are the values 9 ptr[b] .. 9 ptr[b + 1]:
+        // two halves of the columns, the second on the helper thread.
+        let add = |h: &mut [f64], columns: std::ops::Range<usize>| {
+            let offset = 9 * ptr[columns.start];
+            for b in columns {
+                for p in ptr[b]..ptr[b + 1] {
+                    let m = c * self.mass[p];
+                    for i in 0..3 {
+                        h[self.pattern.entry(p, b, i, i) - offset] += m;
+                    }
                 }
             }
+        };
+        if self.parallel() {
+            add(h, 0..nodes);
+        } else {
+            let mid = nodes / 2;
+            let (first, second) = h.split_at_mut(9 * ptr[mid]);
+            crate::par::join(|| add(first, 0..mid), || add(second, mid..nodes));
         }
     }
 
