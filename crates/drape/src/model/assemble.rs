@@ -197,14 +197,18 @@ impl Model {
             // Each colour in two halves, the second on the helper thread
             // (`crate::par`): a colour of the pedestal is about 120
             // elements, 10-40 µs of work, too little for rayon's wake-ups.
-            let (mut first, mut second) = (Local::new(), Local::new());
+            // Each thread's scratch is kept between assemblies (7 kB to
+            // zero otherwise, twice per assembly).
+            thread_local! {
+                static LOCAL: std::cell::RefCell<Local> = std::cell::RefCell::new(Local::new());
+            }
+            let run = |chunk: &[usize]| LOCAL.with(|l| work(&mut l.borrow_mut(), chunk));
             return self
                 .colours
                 .iter()
                 .map(|c| {
                     let (a, b) = c.split_at(c.len() / 2);
-                    let (ea, eb) =
-                        crate::par::join(|| work(&mut first, a), || work(&mut second, b));
+                    let (ea, eb) = crate::par::join(|| run(a), || run(b));
                     ea + eb
                 })
                 .sum();

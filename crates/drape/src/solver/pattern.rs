@@ -187,12 +187,22 @@ impl SparsePattern {
     /// entry ([`SparsePattern::asymmetry`] `<= tolerance`), stopping at the
     /// first entry that is not.
     pub fn is_symmetric(&self, values: &[f64], tolerance: f64) -> bool {
-        // (A comparison rather than `f64::max`, whose NaN rule keeps the
-        // loop from vectorising: this runs at every Hessian evaluation. A
-        // NaN entry then fails the test below.)
-        let max = values
+        // Eight running maxima, by comparisons rather than `f64::max`
+        // (whose NaN rule keeps the loop from vectorising): this runs at
+        // every Hessian evaluation. A NaN entry then fails the test below.
+        let mut lanes = [0.0f64; 8];
+        let chunks = values.chunks_exact(8);
+        let rest = chunks.remainder();
+        for chunk in chunks {
+            for (m, v) in lanes.iter_mut().zip(chunk) {
+                let a = v.abs();
+                *m = if a > *m { a } else { *m };
+            }
+        }
+        let max = lanes
             .iter()
-            .fold(0.0f64, |a, v| if v.abs() > a { v.abs() } else { a });
+            .chain(rest)
+            .fold(0.0f64, |m, v| if v.abs() > m { v.abs() } else { m });
         let bound = tolerance * max;
         values
             .iter()
