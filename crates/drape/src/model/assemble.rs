@@ -25,6 +25,13 @@ impl Shared {
     unsafe fn add(self, k: usize, v: f64) {
         unsafe { *self.0.add(k) += v }
     }
+
+    /// # Safety
+    /// As [`Shared::add`].
+    #[inline]
+    unsafe fn set(self, k: usize, v: f64) {
+        unsafe { *self.0.add(k) = v }
+    }
 }
 
 /// Elements per parallel work item.
@@ -111,12 +118,13 @@ impl Model {
         let want_h = h.is_some();
         let h_ptr = match h {
             Some(h) => {
-                if self.parallel() {
-                    h.fill(0.0);
-                } else {
-                    // (A quarter of a megabyte for the pedestal: two halves.)
-                    let (a, b) = h.split_at_mut(h.len() / 2);
-                    crate::par::join(|| a.fill(0.0), || b.fill(0.0));
+                // Not zeroed: each block's first element (in the colour
+                // order) writes it, the others add; blocks no element
+                // reaches are zeroed here.
+                for &(base, stride) in &self.untouched_blocks {
+                    for j in 0..3 {
+                        h[base + j * stride..base + j * stride + 3].fill(0.0);
+                    }
                 }
                 Shared(h.as_mut_ptr())
             }
@@ -173,6 +181,7 @@ impl Model {
                     }
                     if want_h {
                         let bases = &self.element_blocks[e * n * n..(e + 1) * n * n];
+                        let first = &self.element_block_first[e * n * n..(e + 1) * n * n];
                         let k = &local.k[..m * m];
                         for (b, &node_b) in el.iter().enumerate() {
                             // Block (a, b), entry (i, j): at base + j stride + i.
@@ -182,7 +191,12 @@ impl Model {
                                 for j in 0..3 {
                                     let column = base + j * stride;
                                     for i in 0..3 {
-                                        h_ptr.add(column + i, k[(3 * a + i) * m + 3 * b + j]);
+                                        let v = k[(3 * a + i) * m + 3 * b + j];
+                                        if first[a * n + b] {
+                                            h_ptr.set(column + i, v);
+                                        } else {
+                                            h_ptr.add(column + i, v);
+                                        }
                                     }
                                 }
                             }

@@ -49,6 +49,15 @@ pub struct Model {
     /// its entry (0, 0) ([`SparsePattern::block_layout`] of its node-graph
     /// position, [`SparsePattern::element_blocks`]).
     element_blocks: Vec<usize>,
+    /// Whether element block `n^2 e + n a + b` is the first to be added
+    /// into its Hessian block in the assembly's order (colour by colour):
+    /// it then writes its values rather than adding them, and the Hessian
+    /// is not zeroed first.
+    element_block_first: Vec<bool>,
+    /// Layouts `(base, stride)` ([`SparsePattern::block_layout`]) of the
+    /// Hessian blocks no element adds into (the diagonal blocks of nodes
+    /// outside every element), zeroed at each assembly.
+    untouched_blocks: Vec<(usize, usize)>,
     /// Element lists that share no node (parallel assembly).
     colours: Vec<Vec<usize>>,
     /// Mass matrix on the node graph, `M^ab = m[p_ab] I3` (kg).
@@ -98,9 +107,9 @@ impl Model {
         let p = mesh.order.degree();
         let geometry = ElementGeometry::new(&mesh, &QuadratureRule::of_degree(4 * (p - 1)));
         let pattern = SparsePattern::new(mesh.node_count(), mesh.elements());
-        let element_blocks = {
+        let positions = pattern.element_blocks(mesh.elements());
+        let element_blocks: Vec<usize> = {
             let n = mesh.order.nodes_per_element();
-            let positions = pattern.element_blocks(mesh.elements());
             mesh.elements()
                 .zip(positions.chunks(n * n))
                 .flat_map(|(el, p)| (0..n * n).map(move |ab| (p[ab], el[ab % n])))
@@ -108,6 +117,25 @@ impl Model {
                 .collect()
         };
         let colours = colour_elements(mesh.node_count(), mesh.elements());
+        let (element_block_first, untouched_blocks) = {
+            let n2 = mesh.order.nodes_per_element().pow(2);
+            let mut first = vec![false; element_blocks.len()];
+            // Blocks by node-graph position.
+            let (ptr, _) = pattern.node_graph();
+            let mut touched = vec![false; ptr[mesh.node_count()]];
+            for &e in colours.iter().flatten() {
+                for k in n2 * e..n2 * (e + 1) {
+                    first[k] = !touched[positions[k]];
+                    touched[positions[k]] = true;
+                }
+            }
+            let untouched = (0..mesh.node_count())
+                .flat_map(|b| (ptr[b]..ptr[b + 1]).map(move |p| (p, b)))
+                .filter(|&(p, _)| !touched[p])
+                .map(|(p, b)| pattern.block_layout(p, b))
+                .collect();
+            (first, untouched)
+        };
         let mass = mass::assemble_mass(&mesh, &pattern, density * section.thickness, mass_kind)?;
         let area_weights = mass::area_weights(&mesh);
         let pressure_quadrature = PressureQuadrature::new(mesh.order);
@@ -124,6 +152,8 @@ impl Model {
             mass_kind,
             pattern,
             element_blocks,
+            element_block_first,
+            untouched_blocks,
             colours,
             mass,
             area_weights,
@@ -356,6 +386,45 @@ mod tests {
             );
             assert_eq!(mesh.element_count() >= PARALLEL_ABOVE, divisions == 48);
             assembly_on_one_and_two_threads_agrees(wrinkling_model(mesh));
+        }
+    }
+
+    /// The Hessian is overwritten, not added to: assembled into a buffer
+    /// full of NaN (a diverged evaluation's leftovers) it is the one
+    /// assembled into zeros, bit for bit — on a mesh with a node outside
+    /// every element too, whose diagonal block no element writes.
+    #[test]
+    fn assembly_overwrites_every_hessian_entry() {
+        for orphan in [false, true] {
+            let mut mesh = rectangle(
+                [0.2, 0.2],
+                [6, 6],
+                Pattern::Right,
+                [0.0; 3],
+                ElementOrder::Linear,
+            );
+            if orphan {
+                mesh.nodes.push([0.5, 0.5, 0.0]);
+            }
+            let model = wrinkling_model(mesh);
+            assert_eq!(!model.untouched_blocks.is_empty(), orphan);
+            let y: Vec<f64> = model
+                .initial_positions()
+                .chunks(3)
+                .flat_map(|x| [1.02 * x[0], 0.97 * x[1], 0.02 * (9.0 * x[0]).cos() * x[1]])
+                .collect();
+            let n = model.dofs();
+            let (mut f, mut fe) = (vec![0.0; n], vec![0.0; n]);
+            let mut zeros = vec![0.0; model.pattern.nnz()];
+            let mut nans = vec![f64::NAN; model.pattern.nnz()];
+            model.assemble(&y, 0.0, &mut f, &mut fe, Some(&mut zeros));
+            model.assemble(&y, 0.0, &mut f, &mut fe, Some(&mut nans));
+            assert!(
+                zeros
+                    .iter()
+                    .zip(&nans)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+            );
         }
     }
 
