@@ -153,24 +153,32 @@ impl ContactModel {
             }
         }
         // H <- Q^T H Q: right-multiply column block p, left-multiply row block p.
+        // (Blocks located once each: entry (i, j) of a block at
+        // `base + j stride + i`; block (p, b) found as the mirror of block
+        // (b, p)'s first entry, no search.)
         for a in active.iter() {
             let p = a.node;
             let q = a.frame;
+            let (_, stride_p) = pattern.block_layout(ptr[p], p);
             for k in ptr[p]..ptr[p + 1] {
                 // Block (b, p): columns j of node p; new column j = sum_m H[:, m] q[j][m].
+                let (base, _) = pattern.block_layout(k, p);
                 for i in 0..3 {
-                    let old: [f64; 3] = [0, 1, 2].map(|m| h[pattern.entry(k, p, i, m)]);
+                    let old: [f64; 3] = [0, 1, 2].map(|m| h[base + m * stride_p + i]);
                     for j in 0..3 {
-                        h[pattern.entry(k, p, i, j)] = dot(old, q[j]);
+                        h[base + j * stride_p + i] = dot(old, q[j]);
                     }
                 }
             }
-            for &b in &rows[ptr[p]..ptr[p + 1]] {
-                let k = pattern.node_block(p, b).expect("symmetric pattern");
+            for k in ptr[p]..ptr[p + 1] {
+                // Block (p, b) in column b.
+                let b = rows[k];
+                let base = pattern.transpose_of(pattern.block_layout(k, p).0);
+                let (_, stride_b) = pattern.block_layout(ptr[b], b);
                 for j in 0..3 {
-                    let old: [f64; 3] = [0, 1, 2].map(|m| h[pattern.entry(k, b, m, j)]);
+                    let old: [f64; 3] = [0, 1, 2].map(|m| h[base + j * stride_b + m]);
                     for i in 0..3 {
-                        h[pattern.entry(k, b, i, j)] = dot(q[i], old);
+                        h[base + j * stride_b + i] = dot(q[i], old);
                     }
                 }
             }
