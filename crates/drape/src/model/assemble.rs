@@ -34,6 +34,50 @@ impl Shared {
     }
 }
 
+/// Adds (or, for a block's first element, writes) the element Hessian `k`
+/// (row-major, `3N x 3N`) of an element with nodes `el` into the Hessian
+/// values behind `h`: block `(a, b)` starts at `bases[N a + b]`, its
+/// entry `(i, j)` at `+ j stride_b + i`. With `N` known the loops unroll
+/// and `k`'s indices are constants.
+///
+/// # Safety (of the writes through `h`)
+/// No other thread writes the same entries meanwhile (elements of one
+/// colour share no node).
+#[inline(always)]
+fn scatter<const N: usize>(
+    model: &Model,
+    h: Shared,
+    el: &[usize],
+    k: &[f64],
+    bases: &[usize],
+    first: &[bool],
+) {
+    let k: &[f64] = &k[..9 * N * N];
+    let (ptr, _) = model.pattern.node_graph();
+    for b in 0..N {
+        let node_b = el[b];
+        let stride = 3 * (ptr[node_b + 1] - ptr[node_b]);
+        for a in 0..N {
+            let base = bases[a * N + b];
+            let block: [f64; 9] =
+                std::array::from_fn(|ij| k[(3 * a + ij % 3) * 3 * N + 3 * b + ij / 3]);
+            // SAFETY: see the function's docs; the indices are those of
+            // the pattern's block (a, b).
+            unsafe {
+                if first[a * N + b] {
+                    for (ij, v) in block.iter().enumerate() {
+                        h.set(base + (ij / 3) * stride + ij % 3, *v);
+                    }
+                } else {
+                    for (ij, v) in block.iter().enumerate() {
+                        h.add(base + (ij / 3) * stride + ij % 3, *v);
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// Elements per parallel work item.
 const CHUNK: usize = 256;
 
@@ -183,23 +227,10 @@ impl Model {
                         let bases = &self.element_blocks[e * n * n..(e + 1) * n * n];
                         let first = &self.element_block_first[e * n * n..(e + 1) * n * n];
                         let k = &local.k[..m * m];
-                        for (b, &node_b) in el.iter().enumerate() {
-                            // Block (a, b), entry (i, j): at base + j stride + i.
-                            let stride = self.pattern.block_layout(0, node_b).1;
-                            for a in 0..n {
-                                let base = bases[a * n + b];
-                                for j in 0..3 {
-                                    let column = base + j * stride;
-                                    for i in 0..3 {
-                                        let v = k[(3 * a + i) * m + 3 * b + j];
-                                        if first[a * n + b] {
-                                            h_ptr.set(column + i, v);
-                                        } else {
-                                            h_ptr.add(column + i, v);
-                                        }
-                                    }
-                                }
-                            }
+                        match n {
+                            3 => scatter::<3>(self, h_ptr, el, k, bases, first),
+                            6 => scatter::<6>(self, h_ptr, el, k, bases, first),
+                            _ => scatter::<10>(self, h_ptr, el, k, bases, first),
                         }
                     }
                 }
