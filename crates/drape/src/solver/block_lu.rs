@@ -775,7 +775,7 @@ impl BlockLu {
     /// `b`, is `9 ptr[b] + 3 j deg(b) + 3 (p - ptr[b]) + i`.
     ///
     /// The ordering is approximate minimum degree (AMD) on the node graph.
-    /// From [`SPLIT_MIN_NODES`] nodes on, the graph is also cut in two by
+    /// From 100 nodes on (`SPLIT_MIN_NODES`), the graph is also cut in two by
     /// a level set of a breadth-first search from a peripheral node, and
     /// AMD's order is kept within each half and the separator, which goes
     /// last (nested dissection at the top level only). The two halves
