@@ -238,25 +238,24 @@ impl Model {
             }
             sum
         };
-        if !self.parallel() {
-            // Each colour in two halves, the second on the helper thread
-            // (`crate::par`): a colour of the pedestal is about 120
-            // elements, 10-40 µs of work, too little for rayon's wake-ups.
-            // Each thread's scratch is kept between assemblies (7 kB to
-            // zero otherwise, twice per assembly).
+        if let Some(halves) = &self.halves {
+            // Two halves of the mesh that share no node, the second on
+            // the helper thread (`crate::par`: rayon's wake-ups cost more
+            // than such a loop), then the elements at their interface,
+            // each colour in two halves. Each thread's scratch is kept
+            // between assemblies (7 kB to zero otherwise).
             thread_local! {
                 static LOCAL: std::cell::RefCell<Local> = std::cell::RefCell::new(Local::new());
             }
             let run = |chunk: &[usize]| LOCAL.with(|l| work(&mut l.borrow_mut(), chunk));
-            return self
-                .colours
-                .iter()
-                .map(|c| {
-                    let (a, b) = c.split_at(c.len() / 2);
-                    let (ea, eb) = crate::par::join(|| run(a), || run(b));
-                    ea + eb
-                })
-                .sum();
+            let (ea, eb) = crate::par::join(|| run(&halves.first), || run(&halves.second));
+            let mut energy = ea + eb;
+            for c in &halves.interface {
+                let (a, b) = c.split_at(c.len() / 2);
+                let (ea, eb) = crate::par::join(|| run(a), || run(b));
+                energy += ea + eb;
+            }
+            return energy;
         }
         let mut energy = 0.0;
         for colour in &self.colours {
