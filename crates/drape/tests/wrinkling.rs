@@ -262,10 +262,10 @@ fn newton_effort_with_wrinkling_is_at_most_one_and_a_half_times() {
 /// test above: the fold of the corners may take the mirror branch through
 /// round-off), with at most 82 % of its factorisations. Both gates matter
 /// here: tried only after a Newton step that shrank the increment
-/// fourfold, chord steps saved 13 % (1,380 factorisations against plain
-/// Newton's 1,585); tried also after one that cut the residual a
+/// fourfold, chord steps save 17 % (1,324 factorisations against plain
+/// Newton's 1,587); tried also after one that cut the residual a
 /// hundredfold — the step that follows a linear phase where wrinkling
-/// states switched — they save 25 % (1,193). The bound sits between the
+/// states switched — they save 29 % (1,133). The bound sits between the
 /// two (checked: the test fails with the increment gate alone).
 #[test]
 fn chord_steps_save_a_fifth_of_the_factorisations_on_the_wrinkling_pedestal() {
