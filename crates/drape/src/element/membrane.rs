@@ -239,6 +239,34 @@ pub fn element_stress(
     (s.map(|v| v / area), e.map(|v| v / area))
 }
 
+/// [`element_stress`] and the element's wrinkling state
+/// ([`Material::wrinkle_state`] of the mean strain): for a one-point
+/// rule (linear triangles) by one material evaluation
+/// ([`Material::stress_state`]), else by the state of the mean strain.
+#[allow(non_snake_case)]
+pub fn element_stress_state(
+    material: &dyn Material,
+    section: Section,
+    y: &[[f64; 3]],
+    grad: &[[f64; 2]],
+    weight: &[f64],
+) -> ([f64; 3], [f64; 3], Option<crate::material::WrinkleState>) {
+    if let [w] = weight {
+        let F = deformation_gradient(y, grad);
+        let e = green_lagrange(&F);
+        let (sq, state) = material.stress_state(e);
+        // The arithmetic of `element_stress` with one point, to the bit.
+        let s = [
+            w * (sq[0] + section.prestress),
+            w * (sq[1] + section.prestress),
+            w * sq[2],
+        ];
+        return (s.map(|v| v / w), e.map(|v| w * v / w), state);
+    }
+    let (s, e) = element_stress(material, section, y, grad, weight);
+    (s, e, material.wrinkle_state(e))
+}
+
 /// Principal values `(s1, s2)`, `s1 >= s2`, of the symmetric 2x2 tensor
 /// `[[s0, s2], [s2, s1]]` given as `[s0, s1, s2]`.
 pub fn principal_values(s: [f64; 3]) -> (f64, f64) {

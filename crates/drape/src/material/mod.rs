@@ -58,4 +58,10 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     fn wrinkle_state(&self, _strain: [f64; 3]) -> Option<WrinkleState> {
         None
     }
+    /// [`Material::stress`] and [`Material::wrinkle_state`] at once
+    /// (override when they share work: the wrinkling models decide the
+    /// state by the decomposition that gives the stress).
+    fn stress_state(&self, strain: [f64; 3]) -> ([f64; 3], Option<WrinkleState>) {
+        (self.stress(strain), self.wrinkle_state(strain))
+    }
 }

@@ -197,7 +197,7 @@ impl Wrinkling {
     /// Energy, stress and (with `TANGENT`) the tangent at strain `e`; the
     /// principal decomposition that decides the state is computed once and
     /// serves the response too.
-    fn respond<const TANGENT: bool>(&self, e: [f64; 3]) -> MaterialResponse {
+    fn respond<const TANGENT: bool>(&self, e: [f64; 3]) -> (MaterialResponse, WrinkleState) {
         let c = self.elastic.matrix();
         let slack = || MaterialResponse {
             energy: 0.0,
@@ -215,14 +215,15 @@ impl Wrinkling {
                 if s2 >= 0.0 {
                     // Taut.
                     let w = self.elastic.energy(e) + self.prestress * (e[0] + e[1]);
-                    return MaterialResponse {
+                    let r = MaterialResponse {
                         energy: w,
                         stress: s,
                         tangent: c,
                     };
+                    return (r, WrinkleState::Taut);
                 }
                 if s1 <= 0.0 {
-                    return slack();
+                    return (slack(), WrinkleState::Slack);
                 }
                 // Wrinkled.
                 let stress = scale_in_basis(s, n1, 1.0, 0.0, 0.0);
@@ -240,19 +241,20 @@ impl Wrinkling {
                 }
                 // Reported energy: 1/2 P : E (the model has no energy).
                 let energy = 0.5 * (stress[0] * e[0] + stress[1] * e[1] + stress[2] * e[2]);
-                MaterialResponse {
+                let r = MaterialResponse {
                     energy,
                     stress,
                     tangent,
-                }
+                };
+                (r, WrinkleState::Wrinkled)
             }
             WrinklingModel::RelaxedEnergy => {
                 let (e1, e2, n1) = eigen(e[0], e[1], 0.5 * e[2]);
                 if e1 <= 0.0 {
-                    return slack();
+                    return (slack(), WrinkleState::Slack);
                 }
                 if e2 > -self.nu * e1 {
-                    return self.elastic.evaluate(e);
+                    return (self.elastic.evaluate(e), WrinkleState::Taut);
                 }
                 // Wrinkled.
                 let y = self.young;
@@ -274,11 +276,12 @@ impl Wrinkling {
                         }
                     }
                 }
-                MaterialResponse {
+                let r = MaterialResponse {
                     energy: 0.5 * y * e1 * e1,
                     stress,
                     tangent,
-                }
+                };
+                (r, WrinkleState::Wrinkled)
             }
         }
     }
@@ -286,20 +289,25 @@ impl Wrinkling {
 
 impl Material for Wrinkling {
     fn energy(&self, e: [f64; 3]) -> f64 {
-        self.respond::<false>(e).energy
+        self.respond::<false>(e).0.energy
     }
 
     fn stress(&self, e: [f64; 3]) -> [f64; 3] {
-        self.respond::<false>(e).stress
+        self.respond::<false>(e).0.stress
     }
 
     fn tangent(&self, e: [f64; 3]) -> [[f64; 3]; 3] {
-        self.respond::<true>(e).tangent
+        self.respond::<true>(e).0.tangent
     }
 
     fn energy_stress(&self, e: [f64; 3]) -> (f64, [f64; 3]) {
-        let r = self.respond::<false>(e);
+        let r = self.respond::<false>(e).0;
         (r.energy, r.stress)
+    }
+
+    fn stress_state(&self, e: [f64; 3]) -> ([f64; 3], Option<WrinkleState>) {
+        let (r, state) = self.respond::<false>(e);
+        (r.stress, Some(state))
     }
 
     fn has_symmetric_tangent(&self) -> bool {
@@ -311,13 +319,42 @@ impl Material for Wrinkling {
     }
 
     fn evaluate(&self, e: [f64; 3]) -> MaterialResponse {
-        self.respond::<true>(e)
+        self.respond::<true>(e).0
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `stress_state` gives what `stress` and `wrinkle_state` give
+    /// apart, bit for bit, in every state of both models.
+    #[test]
+    fn stress_state_is_stress_and_wrinkle_state() {
+        for model in [
+            WrinklingModel::StressProjection,
+            WrinklingModel::RelaxedEnergy,
+        ] {
+            let m = Wrinkling::new(2.0e6, 0.3, 0.0, model);
+            let mut seen = [false; 3];
+            for i in 0..9 {
+                for j in 0..9 {
+                    for k in 0..3 {
+                        let e = [
+                            (i as f64 - 4.0) * 0.003,
+                            (j as f64 - 4.0) * 0.003,
+                            (k as f64 - 1.0) * 0.004,
+                        ];
+                        let (s, state) = m.stress_state(e);
+                        assert_eq!(s.map(f64::to_bits), m.stress(e).map(f64::to_bits));
+                        assert_eq!(state, m.wrinkle_state(e));
+                        seen[state.expect("a wrinkling model") as usize] = true;
+                    }
+                }
+            }
+            assert_eq!(seen, [true; 3], "{model:?}");
+        }
+    }
     use crate::fd::{gradient_error, jacobian_error};
 
     const Y: f64 = 2.0e6;

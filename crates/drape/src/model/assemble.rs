@@ -7,7 +7,7 @@
 
 use super::Model;
 use crate::element::lagrange::MAX_NODES;
-use crate::element::membrane::{element_force_hessian, element_stress, principal_values};
+use crate::element::membrane::{element_force_hessian, element_stress_state, principal_values};
 use crate::load::pressure::add_pressure_force;
 use rayon::prelude::*;
 
@@ -327,15 +327,15 @@ impl Model {
         let n = self.mesh.order.nodes_per_element();
         let ye = self.element_positions(e, y);
         let (grad, weight) = self.geometry.element(e);
-        let (s, strain) =
-            element_stress(self.material.as_ref(), self.section, &ye[..n], grad, weight);
+        let (s, _, wrinkle_state) =
+            element_stress_state(self.material.as_ref(), self.section, &ye[..n], grad, weight);
         let (s1, s2) = principal_values(s);
         // An unstressed element (a fabric in free fall) is slack,
         // whatever the round-off in its stress says.
         let state = if s1.abs().max(s2.abs()) < UNSTRESSED {
             2
         } else {
-            match self.material.wrinkle_state(strain) {
+            match wrinkle_state {
                 Some(state) => state as i32,
                 None if s2 >= 0.0 => 0,
                 None if s1 > 0.0 => 1,
