@@ -47,8 +47,12 @@ enum Command {
         /// run was started with.
         #[arg(required_unless_present = "resume")]
         scenario: Option<PathBuf>,
-        /// Output directory [default: ./out/<scenario stem>].
-        #[arg(long, conflicts_with = "resume")]
+        /// Output directory (default: `./out/<scenario stem>`).
+        #[arg(
+            long,
+            conflicts_with = "resume",
+            help = "Output directory [default: ./out/<scenario stem>]"
+        )]
         out: Option<PathBuf>,
         /// Continue the run in DIR from its checkpoint.
         #[arg(long, value_name = "DIR")]
