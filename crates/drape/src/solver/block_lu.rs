@@ -199,7 +199,7 @@ struct Symbolic {
 /// `4 c + r`, the fourth row zero. A column is then one 256-bit vector
 /// and two columns one 512-bit vector: the block products of the
 /// factorisation run as three broadcasts and six fused multiply–adds per
-/// block (`sub_product`), against nine multiplies of three-wide vectors
+/// block ([`updates`]), against nine multiplies of three-wide vectors
 /// and their shuffles for a 3x3 row-major block. The factor's `U` blocks
 /// and the row accumulators hold the transpose (entry `(r, c)` at
 /// `4 r + c`), so that the row updates are the same product.
@@ -783,8 +783,8 @@ impl BlockLu {
     /// ([`crate::par::join`]). The split is kept when it leaves the
     /// longer of the two paths (a half, then the separator) at most 70 %
     /// of AMD's work and adds at most 20 % to the total (the 20x20
-    /// pedestal: 2.36 M multiply–adds with AMD, 2.46 M split, of which
-    /// 1.26 M on the longer path). Whether it is split depends on the
+    /// pedestal: 2.36 M multiply–adds with AMD, 2.52 M split, of which
+    /// 1.32 M on the longer path). Whether it is split depends on the
     /// graph alone, never on the machine, so results do not either.
     pub fn new(node_ptr: &[usize], node_rows: &[usize]) -> Result<Self, BlockLuError> {
         let n = node_ptr.len() - 1;
@@ -808,12 +808,18 @@ impl BlockLu {
         let nnz = sym.l_rows.len();
         let separator = n - sym.split.1;
         let separator_nnz = nnz - sym.l_ptr[sym.split.1];
+        let split = sym.split != (0, 0);
+        // (Unused, and empty, when the ordering is not split.)
+        let (separator, separator_nnz) = if split {
+            (separator, separator_nnz)
+        } else {
+            (0, 0)
+        };
         let contribution = || Contribution {
             diag: vec![ZERO; separator],
             col: vec![ZERO; separator_nnz],
             row: vec![ZERO; separator_nnz],
         };
-        let split = sym.split != (0, 0);
         Ok(Self {
             flops: sym.flops(0..n),
             l: vec![ZERO; nnz],
@@ -823,24 +829,9 @@ impl BlockLu {
             cursor: vec![0; n],
             work: Work::new(n),
             work_b: Work::new(if split { n } else { 0 }),
-            contribution: if split {
-                [contribution(), contribution()]
-            } else {
-                [
-                    Contribution {
-                        diag: Vec::new(),
-                        col: Vec::new(),
-                        row: Vec::new(),
-                    },
-                    Contribution {
-                        diag: Vec::new(),
-                        col: Vec::new(),
-                        row: Vec::new(),
-                    },
-                ]
-            },
+            contribution: [contribution(), contribution()],
             rhs: vec![[0.0; 3]; n],
-            rhs_separator: vec![[0.0; 3]; if split { separator } else { 0 }],
+            rhs_separator: vec![[0.0; 3]; separator],
             sym,
         })
     }
@@ -920,13 +911,11 @@ impl BlockLu {
     /// A split ordering factorises its two halves on two threads, each
     /// also summing its updates of the separator's columns, then the
     /// separator; the sums are the same whichever thread runs a half.
-    /// The kernels run compiled for AVX-512 (F and VL) where the CPU has
-    /// it, else AVX2: the 3x3 block products are register-bound, and
-    /// AVX-512's 32 vector registers (against AVX2's 16) spill less —
-    /// median 0.44 ms instead of 0.53 ms for the pedestal's non-symmetric
-    /// Hessian (15 interleaved runs of the breakdown example, one
-    /// thread), and the portable build's 128-bit vectors are about 20 %
-    /// slower still.
+    /// The block updates run as AVX-512 intrinsics where the CPU has
+    /// AVX-512 F and VL, else compiled for AVX2 and FMA, else portable;
+    /// all three give the same bits ([`updates`]). The pedestal's
+    /// non-symmetric Hessian: 0.15 ms on two threads, 0.27 ms on one
+    /// (docs/performance.md).
     pub fn factorize(&mut self, values: &[f64], symmetric: bool) -> Result<(), BlockLuError> {
         let sym = &self.sym;
         let n = sym.nodes();
@@ -1115,11 +1104,12 @@ impl Symbolic {
 /// Cuts a connected node graph in two by a level set of a breadth-first
 /// search from a peripheral node (found as in George & Liu 1979: restart
 /// from a node of least degree in the last level while the number of
-/// levels grows): the level that best balances the two sides, which then
-/// share no edge. Returns the ordering — `order`'s nodes of the first
-/// side, those of the second, those of the level, each in `order`'s
-/// sequence — and the split `(a, b)`; `None` for small or disconnected
-/// graphs and when no level leaves a quarter of the nodes on each side.
+/// levels grows). Candidates are the [`CUT_CANDIDATES`] best-balanced
+/// levels that leave at least a quarter of the nodes on each side (the
+/// two sides then share no edge); for each, the ordering — `order`'s
+/// nodes of the first side, those of the second, those of the level, each
+/// in `order`'s sequence — and the split `(a, b)`. None for small or
+/// disconnected graphs.
 fn bisect(
     node_ptr: &[usize],
     node_rows: &[usize],
@@ -1154,21 +1144,29 @@ fn bisect(
         return Vec::new();
     };
     let mut depth = 0;
+    // Whether `level` holds the levels from `root`.
+    let mut current = false;
     for _ in 0..8 {
         if bfs(root, &mut level) < n {
             return Vec::new();
         }
+        current = true;
         let last = level.iter().copied().max().unwrap_or(0);
         if last <= depth {
             break;
         }
         depth = last;
-        root = (0..n)
+        let next = (0..n)
             .filter(|&v| level[v] == last)
             .min_by_key(|&v| degree(v))
             .unwrap_or(root);
+        current = next == root;
+        root = next;
     }
-    bfs(root, &mut level);
+    if !current {
+        bfs(root, &mut level);
+    }
+    let depth = level.iter().copied().max().unwrap_or(0);
     let mut sizes = vec![0usize; depth + 1];
     for &l in &level {
         sizes[l] += 1;
@@ -1322,24 +1320,32 @@ mod tests {
         let (p, v) = grid_matrix(3, 3, 8.0, 0.2);
         let (ptr, rows) = p.node_graph();
         let mut lu = BlockLu::new(ptr, rows).unwrap();
-        let mut bad = v.clone();
-        // Node 4's block column and row zero: singular.
+        pivot_of_node_is_reported_then_recovered(&mut lu, &p, &v, 4);
+    }
+
+    /// With `node`'s block column and row zero (singular), factorising
+    /// reports that node's pivot; the next factorisation of `v` solves to
+    /// round-off (the accumulators were left clean).
+    fn pivot_of_node_is_reported_then_recovered(
+        lu: &mut BlockLu,
+        p: &SparsePattern,
+        v: &[f64],
+        node: usize,
+    ) {
+        let mut bad = v.to_vec();
         for c in 0..p.dimension() {
             for k in p.col_ptr[c]..p.col_ptr[c + 1] {
-                if c / 3 == 4 || p.row_idx[k] / 3 == 4 {
+                if c / 3 == node || p.row_idx[k] / 3 == node {
                     bad[k] = 0.0;
                 }
             }
         }
-        assert_eq!(
-            lu.factorize(&bad, false),
-            Err(BlockLuError::Pivot { node: 4 })
-        );
-        lu.factorize(&v, false).unwrap();
+        assert_eq!(lu.factorize(&bad, false), Err(BlockLuError::Pivot { node }));
+        lu.factorize(v, false).unwrap();
         let b = vec![1.0; p.dimension()];
         let mut x = b.clone();
         lu.solve_in_place(&mut x);
-        assert!(residual(&p, &v, &x, &b) < 1e-12);
+        assert!(residual(p, v, &x, &b) < 1e-12);
     }
 
     /// From 100 nodes on a grid's ordering is split in two halves joined
@@ -1396,20 +1402,7 @@ mod tests {
         let n = lu.nodes();
         for column in [a / 2, (a + b) / 2, (b + n) / 2] {
             let node = lu.sym.perm[column];
-            let mut bad = v.clone();
-            for c in 0..p.dimension() {
-                for k in p.col_ptr[c]..p.col_ptr[c + 1] {
-                    if c / 3 == node || p.row_idx[k] / 3 == node {
-                        bad[k] = 0.0;
-                    }
-                }
-            }
-            assert_eq!(lu.factorize(&bad, false), Err(BlockLuError::Pivot { node }));
-            lu.factorize(&v, false).unwrap();
-            let rhs = vec![1.0; p.dimension()];
-            let mut x = rhs.clone();
-            lu.solve_in_place(&mut x);
-            assert!(residual(&p, &v, &x, &rhs) < 1e-12);
+            pivot_of_node_is_reported_then_recovered(&mut lu, &p, &v, node);
         }
     }
 
