@@ -213,13 +213,49 @@ fn add_force<const N: usize>(
 /// quadrature points (including prestress) and mean Green–Lagrange strain
 /// `[E11, E22, 2 E12]`, in the element's local frame (`e1` along `G_1`, the
 /// direction from its first to its second vertex).
-#[allow(non_snake_case)]
 pub fn element_stress(
     material: &dyn Material,
     section: Section,
     y: &[[f64; 3]],
     grad: &[[f64; 2]],
     weight: &[f64],
+) -> ([f64; 3], [f64; 3]) {
+    mean_stress(section, y, grad, weight, |e| material.stress(e))
+}
+
+/// [`element_stress`] and the element's wrinkling state
+/// ([`Material::wrinkle_state`] of the mean strain): for a one-point
+/// rule (linear triangles) by one material evaluation
+/// ([`Material::stress_state`]), else by the state of the mean strain.
+pub fn element_stress_state(
+    material: &dyn Material,
+    section: Section,
+    y: &[[f64; 3]],
+    grad: &[[f64; 2]],
+    weight: &[f64],
+) -> ([f64; 3], [f64; 3], Option<crate::material::WrinkleState>) {
+    if weight.len() == 1 {
+        let mut state = None;
+        let (s, e) = mean_stress(section, y, grad, weight, |e| {
+            let (s, st) = material.stress_state(e);
+            state = st;
+            s
+        });
+        return (s, e, state);
+    }
+    let (s, e) = element_stress(material, section, y, grad, weight);
+    (s, e, material.wrinkle_state(e))
+}
+
+/// The means of [`element_stress`], with `stress` the material's stress
+/// at a quadrature point's strain.
+#[allow(non_snake_case)]
+fn mean_stress(
+    section: Section,
+    y: &[[f64; 3]],
+    grad: &[[f64; 2]],
+    weight: &[f64],
+    mut stress: impl FnMut([f64; 3]) -> [f64; 3],
 ) -> ([f64; 3], [f64; 3]) {
     let n = y.len();
     let mut s = [0.0; 3];
@@ -228,7 +264,7 @@ pub fn element_stress(
     for (q, w) in weight.iter().enumerate() {
         let F = deformation_gradient(y, &grad[q * n..(q + 1) * n]);
         let eq = green_lagrange(&F);
-        let sq = material.stress(eq);
+        let sq = stress(eq);
         s[0] += w * (sq[0] + section.prestress);
         s[1] += w * (sq[1] + section.prestress);
         s[2] += w * sq[2];
@@ -237,34 +273,6 @@ pub fn element_stress(
         }
     }
     (s.map(|v| v / area), e.map(|v| v / area))
-}
-
-/// [`element_stress`] and the element's wrinkling state
-/// ([`Material::wrinkle_state`] of the mean strain): for a one-point
-/// rule (linear triangles) by one material evaluation
-/// ([`Material::stress_state`]), else by the state of the mean strain.
-#[allow(non_snake_case)]
-pub fn element_stress_state(
-    material: &dyn Material,
-    section: Section,
-    y: &[[f64; 3]],
-    grad: &[[f64; 2]],
-    weight: &[f64],
-) -> ([f64; 3], [f64; 3], Option<crate::material::WrinkleState>) {
-    if let [w] = weight {
-        let F = deformation_gradient(y, grad);
-        let e = green_lagrange(&F);
-        let (sq, state) = material.stress_state(e);
-        // The arithmetic of `element_stress` with one point, to the bit.
-        let s = [
-            w * (sq[0] + section.prestress),
-            w * (sq[1] + section.prestress),
-            w * sq[2],
-        ];
-        return (s.map(|v| v / w), e.map(|v| w * v / w), state);
-    }
-    let (s, e) = element_stress(material, section, y, grad, weight);
-    (s, e, material.wrinkle_state(e))
 }
 
 /// Principal values `(s1, s2)`, `s1 >= s2`, of the symmetric 2x2 tensor
