@@ -1,9 +1,14 @@
 //! Parallel assembly of the internal and pressure forces and the Hessian.
 //!
 //! Elements are processed colour by colour (no two elements of a colour
-//! share a node), each colour in parallel with rayon; an element writes
-//! only the force entries of its own nodes and the Hessian entries of its
-//! own node pairs, so the writes of one colour never overlap.
+//! share a node), each colour in parallel with rayon; below
+//! [`super::PARALLEL_ABOVE`] elements, two halves of the mesh that share
+//! no node on two threads ([`crate::par`]), then the elements between them
+//! colour by colour. An element writes only the force entries of its own
+//! nodes and the Hessian entries of its own node pairs, so the writes of
+//! elements that run at once never overlap. Each Hessian block's first
+//! element in that order writes it and the others add: the Hessian is not
+//! zeroed first.
 
 use super::Model;
 use crate::element::lagrange::MAX_NODES;
@@ -41,8 +46,8 @@ impl Shared {
 /// and `k`'s indices are constants.
 ///
 /// # Safety (of the writes through `h`)
-/// No other thread writes the same entries meanwhile (elements of one
-/// colour share no node).
+/// No other thread writes the same entries meanwhile (elements that run
+/// at once share no node: see the module docs).
 #[inline(always)]
 fn scatter<const N: usize>(
     model: &Model,
@@ -211,9 +216,9 @@ impl Model {
                         -1.0,
                     );
                 }
-                // SAFETY: the elements of one colour share no node, so the
-                // entries written below are disjoint across threads (small
-                // meshes run on the calling thread alone).
+                // SAFETY: elements that run at once (of one colour, or of
+                // the two halves of a small mesh) share no node, so the
+                // entries written below are disjoint across threads.
                 unsafe {
                     for (a, &node) in el.iter().enumerate() {
                         for i in 0..3 {

@@ -108,16 +108,18 @@ impl Halves {
     /// of both sides touch goes to the interface.
     fn new(mesh: &Mesh, colours: &[Vec<usize>]) -> Self {
         let count = mesh.element_count();
-        let centroid = |e: usize| {
-            let el = mesh.element(e);
-            let mut c = [0.0; 3];
-            for &a in el {
-                for i in 0..3 {
-                    c[i] += mesh.nodes[a][i] / el.len() as f64;
+        let centroids: Vec<[f64; 3]> = (0..count)
+            .map(|e| {
+                let el = mesh.element(e);
+                let mut c = [0.0; 3];
+                for &a in el {
+                    for i in 0..3 {
+                        c[i] += mesh.nodes[a][i] / el.len() as f64;
+                    }
                 }
-            }
-            c
-        };
+                c
+            })
+            .collect();
         let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         for x in &mesh.nodes {
             for i in 0..3 {
@@ -130,8 +132,8 @@ impl Halves {
             .unwrap_or(0);
         let mut by_position: Vec<usize> = (0..count).collect();
         by_position.sort_by(|&a, &b| {
-            centroid(a)[axis]
-                .total_cmp(&centroid(b)[axis])
+            centroids[a][axis]
+                .total_cmp(&centroids[b][axis])
                 .then(a.cmp(&b))
         });
         let mut side = vec![0u8; count];
@@ -263,18 +265,14 @@ impl Model {
         })
     }
 
-    /// Whether loops over elements and nodes are worth spreading over
-    /// threads. Below [`PARALLEL_ABOVE`] elements they run on the calling
-    /// thread: waking rayon's workers for a colour of ~120 elements or a
-    /// loop over ~400 nodes costs more than the loop (on the 20x20
-    /// pedestal the hand-offs took a third of the CPU time), and even one
-    /// fork per assembly (two halves of the mesh that share no node, then
-    /// their interface) was slower at every size below it on a 2-core
-    /// machine (docs/performance.md: 1.55 → 1.32 s for the 800-element
-    /// pedestal, 2.47 → 2.28 s for the 1,350-element drape tester, 2.87 →
-    /// 2.67 s for a 3,200-element pedestal; the second core then serves
-    /// the frame writer). Results do not depend on the thread count:
-    /// parallel sums use fixed chunks summed in order.
+    /// Whether loops over elements and nodes go to rayon's pool. Below
+    /// [`PARALLEL_ABOVE`] elements they run in two halves on the calling
+    /// thread and [`crate::par`]'s helper instead: waking a sleeping rayon
+    /// worker for a colour of ~120 elements or a loop over ~400 nodes
+    /// costs more than the loop (on the 20x20 pedestal the hand-offs took
+    /// a third of the CPU time), a spinning helper does not
+    /// (docs/performance.md). Results do not depend on the thread count:
+    /// the splits are fixed and partial sums are added in order.
     pub fn parallel(&self) -> bool {
         self.mesh.element_count() >= PARALLEL_ABOVE
     }
@@ -449,7 +447,7 @@ mod tests {
     use super::*;
     use crate::material::{Wrinkling, WrinklingModel};
     use crate::mesh::ElementOrder;
-    use crate::mesh::generate::{Pattern, rectangle};
+    use crate::mesh::generate::{Pattern, disc, rectangle};
 
     fn wrinkling_model(mesh: Mesh) -> Model {
         Model::new(
@@ -534,11 +532,19 @@ mod tests {
     /// 20x20 pedestal mesh: 80 of 800 elements, two rows).
     #[test]
     fn assembly_halves_share_no_node_and_cover_the_mesh() {
-        for (divisions, order) in [
+        let rectangles = [
             ([20, 20], ElementOrder::Linear),
             ([9, 4], ElementOrder::Cubic),
-        ] {
+        ]
+        .map(|(divisions, order)| {
             let mesh = rectangle([0.2, 0.1], divisions, Pattern::Alternate, [0.0; 3], order);
+            (mesh, Some(divisions))
+        });
+        // And a disc with curved quadratic elements.
+        let meshes = rectangles
+            .into_iter()
+            .chain([(disc(0.15, 9, [0.0; 3], ElementOrder::Quadratic), None)]);
+        for (mesh, divisions) in meshes {
             let model = wrinkling_model(mesh);
             let halves = model.halves.as_ref().expect("a small mesh");
             let nodes_of = |list: &[usize]| {
@@ -556,9 +562,19 @@ mod tests {
             all.sort_unstable();
             assert_eq!(all, (0..model.mesh.element_count()).collect::<Vec<_>>());
             let interface: usize = halves.interface.iter().map(Vec::len).sum();
-            assert!(halves.first.len().abs_diff(halves.second.len()) <= divisions[1] * 2);
-            if divisions == [20, 20] {
-                assert_eq!(interface, 80, "{interface}");
+            match divisions {
+                Some(divisions) => {
+                    let (first, second) = (halves.first.len(), halves.second.len());
+                    assert!(first.abs_diff(second) <= divisions[1] * 2);
+                    if divisions == [20, 20] {
+                        assert_eq!(interface, 80, "{interface}");
+                    }
+                }
+                None => {
+                    // A median cut: each side keeps a third of the elements.
+                    let third = model.mesh.element_count() / 3;
+                    assert!(halves.first.len() >= third && halves.second.len() >= third);
+                }
             }
             // Each interface colour shares no node within itself.
             for c in &halves.interface {

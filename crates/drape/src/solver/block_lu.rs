@@ -913,7 +913,7 @@ impl BlockLu {
     /// separator; the sums are the same whichever thread runs a half.
     /// The block updates run as AVX-512 intrinsics where the CPU has
     /// AVX-512 F and VL, else compiled for AVX2 and FMA, else portable;
-    /// all three give the same bits ([`updates`]). The pedestal's
+    /// all three give the same bits (the private `updates`). The pedestal's
     /// non-symmetric Hessian: 0.15 ms on two threads, 0.27 ms on one
     /// (docs/performance.md).
     pub fn factorize(&mut self, values: &[f64], symmetric: bool) -> Result<(), BlockLuError> {
