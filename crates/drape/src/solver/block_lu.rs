@@ -1033,6 +1033,18 @@ impl BlockLu {
 }
 
 impl Symbolic {
+    /// Where the separator's rows start for a substitution over a range
+    /// starting at `start`: for a half, the split's separator (its rows
+    /// are passed apart); for the separator itself or an unsplit
+    /// ordering, never (`usize::MAX`: every row is its own).
+    fn separator_start(&self, start: usize) -> usize {
+        if self.split.1 > start {
+            self.split.1
+        } else {
+            usize::MAX
+        }
+    }
+
     /// Forward substitution over the columns `cols`, whose entries are
     /// `own` (from `cols.start`): `y_j = D_j^-1 w_j`, then `w_i -= L~_ij
     /// y_j` below, into `separator` (from row `split.1`) for the
@@ -1045,7 +1057,7 @@ impl Symbolic {
         own: &mut [[f64; 3]],
         separator: &mut [[f64; 3]],
     ) {
-        let (c0, s0) = (cols.start, self.split.1.max(cols.start));
+        let (c0, s0) = (cols.start, self.separator_start(cols.start));
         for j in cols {
             let y = mul_vec(&d_inv[j], &own[j - c0]);
             own[j - c0] = y;
@@ -1055,7 +1067,7 @@ impl Symbolic {
                 let a = &l[q].0;
                 let t: [f64; 3] =
                     std::array::from_fn(|r| a[r] * y[0] + a[4 + r] * y[1] + a[8 + r] * y[2]);
-                let wi = if i >= s0 && s0 > c0 {
+                let wi = if i >= s0 {
                     &mut separator[i - s0]
                 } else {
                     &mut own[i - c0]
@@ -1077,12 +1089,12 @@ impl Symbolic {
         own: &mut [[f64; 3]],
         separator: &[[f64; 3]],
     ) {
-        let (c0, s0) = (rows.start, self.split.1.max(rows.start));
+        let (c0, s0) = (rows.start, self.separator_start(rows.start));
         for j in rows.rev() {
             let mut s = own[j - c0];
             for q in self.l_ptr[j]..self.l_ptr[j + 1] {
                 let i = self.l_rows[q] as usize;
-                let wi = if i >= s0 && s0 > c0 {
+                let wi = if i >= s0 {
                     &separator[i - s0]
                 } else {
                     &own[i - c0]
