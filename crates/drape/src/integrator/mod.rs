@@ -26,6 +26,10 @@ pub struct State {
     pub velocities: Vec<f64>,
     /// Accelerations `A` (m/s^2).
     pub accelerations: Vec<f64>,
+    /// How much of the acceleration the next step's predictor carries
+    /// over, `rho` in `[0, 1]` ([`newmark`]'s module docs): 1 at rest and
+    /// after a step whose accelerations persisted.
+    pub persistence: f64,
     /// Work done by the external loads since the start (J), by the
     /// trapezoidal rule on each step: `1/2 (F_n + F_{n+1}) . (Y_{n+1} - Y_n)`.
     pub external_work: f64,
@@ -43,6 +47,7 @@ impl State {
             positions,
             velocities: vec![0.0; n],
             accelerations: vec![0.0; n],
+            persistence: 1.0,
             external_work: 0.0,
             contact,
         }

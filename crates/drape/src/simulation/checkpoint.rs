@@ -1,20 +1,24 @@
 //! Checkpoints: the full state of a run in a versioned binary file, to
 //! resume from (`drape run --resume DIR`).
 //!
-//! Format (little-endian), version 1:
+//! Format (little-endian), version 2:
 //!
 //! ```text
 //! magic "DRAPECKP" · version u32 · scenario hash u64 · dofs u64 · nodes u64 · bodies u64
 //! counters: scheduled steps done, converged steps, Newton iterations, cut-back steps (u64 each),
 //!           first contact time f64 (NaN: none), last strain energy f64,
 //!           steps since the last frame u64, step of the last frame u64, wall seconds f64
-//! state: time f64, external work f64, positions, velocities, accelerations,
+//! state: time f64, external work f64, acceleration persistence f64,
+//!        positions, velocities, accelerations,
 //!        external forces of the last step (dofs f64 each)
 //! contact u8 (0/1), then hints (nodes x bodies u32), held (nodes x 2 u32, u32::MAX: none),
 //!        multipliers (nodes f64)
 //! frames u64, then (time f64, step u64) each
 //! FNV-1a of everything before, u64
 //! ```
+//!
+//! Version 1 (drape before the predictor carried the persistence) is read
+//! too, without the persistence: it resumes with 1, the predictor it had.
 //!
 //! Every count is checked against the model before anything is allocated,
 //! and the trailing hash rejects a truncated or damaged file.
@@ -24,7 +28,7 @@ use crate::integrator::State;
 use crate::scenario::fnv1a;
 
 const MAGIC: &[u8; 8] = b"DRAPECKP";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 
 /// The run's counters at a checkpoint.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -114,6 +118,7 @@ impl Checkpoint {
         b.extend_from_slice(&c.wall_seconds.to_le_bytes());
         b.extend_from_slice(&s.time.to_le_bytes());
         b.extend_from_slice(&s.external_work.to_le_bytes());
+        b.extend_from_slice(&s.persistence.to_le_bytes());
         for v in [
             &s.positions,
             &s.velocities,
@@ -170,7 +175,7 @@ impl Checkpoint {
         }
         let mut r = Reader { bytes: body, at: 8 };
         let version = r.u32()?;
-        if version != VERSION {
+        if version != VERSION && version != 1 {
             return Err(bad(&format!(
                 "version {version}, this drape reads version {VERSION}"
             )));
@@ -201,6 +206,12 @@ impl Checkpoint {
         };
         let time = r.f64()?;
         let external_work = r.f64()?;
+        let persistence = if version >= 2 { r.f64()? } else { 1.0 };
+        if !(0.0..=1.0).contains(&persistence) {
+            return Err(bad(&format!(
+                "acceleration persistence {persistence} outside [0, 1]"
+            )));
+        }
         let positions = r.f64s(dofs)?;
         let velocities = r.f64s(dofs)?;
         let accelerations = r.f64s(dofs)?;
@@ -244,6 +255,7 @@ impl Checkpoint {
                 positions,
                 velocities,
                 accelerations,
+                persistence,
                 external_work,
                 contact,
             },
@@ -323,6 +335,7 @@ mod tests {
                 positions: v(1.0),
                 velocities: v(2.0),
                 accelerations: v(3.0),
+                persistence: 0.375,
                 external_work: 0.01,
                 contact: contact.then(|| ContactState {
                     hints: vec![0, u32::MAX, 2, 1],
@@ -357,5 +370,34 @@ mod tests {
             flipped[40] ^= 1;
             assert!(Checkpoint::from_bytes(&flipped, 6, bodies, 0xdead_beef).is_err());
         }
+    }
+
+    /// The same file as version 1 wrote it: without the persistence.
+    fn as_version_1(bytes: &[u8]) -> Vec<u8> {
+        // magic, version, 4 header u64, 4 counters u64, 5 counter fields,
+        // time, external work: the persistence follows.
+        let at = 8 + 4 + 8 * 4 + 8 * 4 + 8 * 5 + 8 * 2;
+        let mut v1 = bytes[..at].to_vec();
+        v1.extend_from_slice(&bytes[at + 8..bytes.len() - 8]);
+        v1[8..12].copy_from_slice(&1u32.to_le_bytes());
+        let hash = fnv1a(&v1);
+        v1.extend_from_slice(&hash.to_le_bytes());
+        v1
+    }
+
+    /// Version 1 files resume with the persistence 1 (the predictor they
+    /// were written with); a persistence outside [0, 1] is refused.
+    #[test]
+    fn reads_version_1_and_refuses_a_persistence_out_of_range() {
+        let c = sample(true);
+        let bytes = c.to_bytes();
+        let old = Checkpoint::from_bytes(&as_version_1(&bytes), 6, 2, 0xdead_beef).unwrap();
+        let mut expected = c.clone();
+        expected.state.persistence = 1.0;
+        assert_eq!(old, expected);
+        let mut bad = c;
+        bad.state.persistence = 1.5;
+        let e = Checkpoint::from_bytes(&bad.to_bytes(), 6, 2, 0xdead_beef).unwrap_err();
+        assert!(e.to_string().contains("persistence 1.5"), "{e}");
     }
 }
