@@ -174,3 +174,122 @@ fn pressure_on_a_flat_element_totals_p_times_area_along_the_normal() {
         );
     }
 }
+
+/// The element Hessian with each wrinkling model against finite
+/// differences of the force, for every order, in each state and with the
+/// quadrature points of one element in different states: the kernel
+/// computes half the blocks at points with a symmetric tangent, every
+/// block at the others, and nothing at slack points (no stress, no
+/// tangent), so every mixture is checked. (Stress projection's force is
+/// not the gradient of an energy: only the Hessian is checked.)
+#[test]
+fn wrinkling_element_hessians_match_finite_differences_in_every_state_and_mixture() {
+    use drape::material::{Material, WrinkleState, Wrinkling, WrinklingModel};
+    let section = Section {
+        thickness: 6e-4,
+        prestress: 0.0,
+    };
+    // Stretches along the initial x and y, and a gradient of the x
+    // stretch along x that changes the state across a larger element.
+    let cases: [(&str, f64, f64, f64); 4] = [
+        ("taut", 1.05, 1.03, 0.0),
+        ("wrinkled", 1.05, 0.97, 0.0),
+        ("slack", 0.97, 0.98, 0.0),
+        ("mixed", 0.985, 1.01, 0.08),
+    ];
+    for model in [
+        WrinklingModel::StressProjection,
+        WrinklingModel::RelaxedEnergy,
+    ] {
+        let material = Wrinkling::new(2.0e6, 0.3, 0.0, model);
+        for order in ORDERS {
+            let (mesh, _) = curved_element(order, 1);
+            let p = order.degree();
+            let geo = ElementGeometry::new(&mesh, &QuadratureRule::of_degree(4 * (p - 1)));
+            let (grad, weight) = geo.element(0);
+            let m = 3 * mesh.nodes.len();
+            for (name, sx, sy, gradient) in cases {
+                let y0: Vec<f64> = mesh
+                    .nodes
+                    .iter()
+                    .flat_map(|x| {
+                        let stretch = sx + gradient * (x[0] - 0.4);
+                        [stretch * x[0], sy * x[1] + 0.01 * x[0], x[2]]
+                    })
+                    .collect();
+                let force = |y: &[f64]| {
+                    let mut f = vec![0.0; m];
+                    element_force_hessian(
+                        &material,
+                        section,
+                        &as_points(y),
+                        grad,
+                        weight,
+                        &mut f,
+                        None,
+                    );
+                    f
+                };
+                let hessian = |y: &[f64]| {
+                    let (mut f, mut k) = (vec![0.0; m], vec![f64::NAN; m * m]);
+                    element_force_hessian(
+                        &material,
+                        section,
+                        &as_points(y),
+                        grad,
+                        weight,
+                        &mut f,
+                        Some(&mut k),
+                    );
+                    k
+                };
+                // The states of the quadrature points.
+                let n = mesh.nodes.len();
+                let points = as_points(&y0);
+                let states: Vec<WrinkleState> = (0..weight.len())
+                    .map(|q| {
+                        let f = drape::element::membrane::deformation_gradient(
+                            &points,
+                            &grad[q * n..(q + 1) * n],
+                        );
+                        let e = drape::element::membrane::green_lagrange(&f);
+                        material.wrinkle_state(e).unwrap()
+                    })
+                    .collect();
+                let distinct = |s: WrinkleState| states.contains(&s);
+                match name {
+                    "taut" => assert!(states.iter().all(|&s| s == WrinkleState::Taut)),
+                    "wrinkled" => assert!(states.iter().all(|&s| s == WrinkleState::Wrinkled)),
+                    "slack" => assert!(states.iter().all(|&s| s == WrinkleState::Slack)),
+                    _ if order != ElementOrder::Linear => assert!(
+                        [
+                            WrinkleState::Taut,
+                            WrinkleState::Wrinkled,
+                            WrinkleState::Slack
+                        ]
+                        .into_iter()
+                        .filter(|&s| distinct(s))
+                        .count()
+                            >= 2,
+                        "{model:?} {order:?}: the mixed case has points in one state: {states:?}"
+                    ),
+                    _ => {}
+                }
+                let k = hessian(&y0);
+                assert!(
+                    k.iter().all(|v| v.is_finite()),
+                    "{model:?} {order:?} {name}"
+                );
+                if name == "slack" {
+                    assert!(k.iter().all(|&v| v == 0.0), "{model:?} {order:?}: slack");
+                    continue;
+                }
+                let he = jacobian_error(force, hessian, &y0, 1e-7);
+                assert!(
+                    he < TOL,
+                    "{model:?} {order:?} {name}: Hessian vs force {he:e}"
+                );
+            }
+        }
+    }
+}

@@ -90,6 +90,21 @@ pub fn element_force_hessian(
     f: &mut [f64],
     k: Option<&mut [f64]>,
 ) -> f64 {
+    element_force_hessian_or_zero(material, section, y, grad, weight, f, k).0
+}
+
+/// [`element_force_hessian`], and whether the Hessian is zero (no
+/// quadrature point with stress or tangent: a slack element in
+/// dynamics), which the assembly then need not add.
+pub(crate) fn element_force_hessian_or_zero(
+    material: &dyn Material,
+    section: Section,
+    y: &[[f64; 3]],
+    grad: &[[f64; 2]],
+    weight: &[f64],
+    f: &mut [f64],
+    k: Option<&mut [f64]>,
+) -> (f64, bool) {
     // One instance per element order: with the node count known at compile
     // time the loops over nodes unroll (a T3 force and Hessian is then a
     // few hundred straight-line instructions).
@@ -112,7 +127,7 @@ fn force_hessian<const N: usize>(
     weight: &[f64],
     f: &mut [f64],
     k: Option<&mut [f64]>,
-) -> f64 {
+) -> (f64, bool) {
     let y: &[[f64; 3]; N] = y.try_into().expect("N nodes");
     let f: &mut [f64] = &mut f[..3 * N];
     f.fill(0.0);
@@ -121,6 +136,7 @@ fn force_hessian<const N: usize>(
     // K[a][i][b][j] = k[(3a + i) 3N + 3b + j]: the same row-major layout,
     // with sizes the compiler knows (no bounds checks in the products).
     let mut K = [[[[0.0; 3]; N]; 3]; N];
+    let mut zero = true;
     for (q, w) in weight.iter().enumerate() {
         let g: &[[f64; 2]; N] = grad[q * N..(q + 1) * N].try_into().expect("N gradients");
         let F = deformation_gradient(y, g);
@@ -142,6 +158,16 @@ fn force_hessian<const N: usize>(
         energy += tw * (r.energy + section.prestress * (e[0] + e[1]));
         add_force(&F, S, g, tw, f);
         let D = r.tangent;
+        // A point with neither stress nor tangent (a slack membrane in
+        // dynamics) adds nothing to the Hessian.
+        if S == [0.0; 3] && D == [[0.0; 3]; 3] {
+            continue;
+        }
+        zero = false;
+        // A symmetric tangent (taut, slack with a tangent, SVK) gives
+        // symmetric blocks, `K_ba = K_ab^T`: only the blocks `a <= b` are
+        // computed, 6 of 9 for a T3, each added to both places.
+        let symmetric = D[0][1] == D[1][0] && D[0][2] == D[2][0] && D[1][2] == D[2][1];
         // B[a][i] = d e / d Y^a_i, and DB[a][i] = tw D B[a][i].
         let mut B = [[[0.0; 3]; 3]; N];
         let mut DB = [[[0.0; 3]; 3]; N];
@@ -168,22 +194,35 @@ fn force_hessian<const N: usize>(
             ];
             for i in 0..3 {
                 let bai = B[a][i];
-                let row = &mut K[a][i];
                 for b in 0..N {
+                    if symmetric && b < a {
+                        // Added with block (b, a).
+                        continue;
+                    }
                     let gb = g[b];
                     for j in 0..3 {
                         let dbj = DB[b][j];
-                        row[b][j] += bai[0] * dbj[0] + bai[1] * dbj[1] + bai[2] * dbj[2];
+                        let mut v = bai[0] * dbj[0] + bai[1] * dbj[1] + bai[2] * dbj[2];
+                        if j == i {
+                            v += sa[0] * gb[0] + sa[1] * gb[1];
+                        }
+                        K[a][i][b][j] += v;
+                        if symmetric && b > a {
+                            K[b][j][a][i] += v;
+                        }
                     }
-                    row[b][i] += sa[0] * gb[0] + sa[1] * gb[1];
                 }
             }
         }
     }
     if let Some(k) = k {
-        k[..9 * N * N].copy_from_slice(K.as_flattened().as_flattened().as_flattened());
+        if zero {
+            k[..9 * N * N].fill(0.0);
+        } else {
+            k[..9 * N * N].copy_from_slice(K.as_flattened().as_flattened().as_flattened());
+        }
     }
-    energy
+    (energy, zero)
 }
 
 /// `f^a += tw F S grad phi^a` for every node `a`.

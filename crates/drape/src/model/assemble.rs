@@ -12,7 +12,9 @@
 
 use super::Model;
 use crate::element::lagrange::MAX_NODES;
-use crate::element::membrane::{element_force_hessian, element_stress_state, principal_values};
+use crate::element::membrane::{
+    element_force_hessian_or_zero, element_stress_state, principal_values,
+};
 use crate::load::pressure::add_pressure_force;
 use rayon::prelude::*;
 
@@ -41,7 +43,8 @@ impl Shared {
 
 /// Adds (or, for a block's first element, writes) the element Hessian `k`
 /// (row-major, `3N x 3N`) of an element with nodes `el` into the Hessian
-/// values behind `h`: block `(a, b)` starts at `bases[N a + b]`, its
+/// values behind `h`; `zero`: `k` is zero, and only the first elements'
+/// blocks are written. Block `(a, b)` starts at `bases[N a + b]`, its
 /// entry `(i, j)` at `+ j stride_b + i`. With `N` known the loops unroll
 /// and `k`'s indices are constants.
 ///
@@ -56,6 +59,7 @@ fn scatter<const N: usize>(
     k: &[f64],
     bases: &[usize],
     first: &[bool],
+    zero: bool,
 ) {
     let k: &[f64] = &k[..9 * N * N];
     let (ptr, _) = model.pattern.node_graph();
@@ -64,6 +68,9 @@ fn scatter<const N: usize>(
         let stride = 3 * (ptr[node_b + 1] - ptr[node_b]);
         for a in 0..N {
             let base = bases[a * N + b];
+            if zero && !first[a * N + b] {
+                continue;
+            }
             let block: [f64; 9] =
                 std::array::from_fn(|ij| k[(3 * a + ij % 3) * 3 * N + 3 * b + ij / 3]);
             // SAFETY: see the function's docs; the indices are those of
@@ -195,7 +202,7 @@ impl Model {
                 }
                 let (grad, weight) = self.geometry.element(e);
                 let k = want_h.then_some(&mut local.k[..m * m]);
-                let u = element_force_hessian(
+                let (u, zero) = element_force_hessian_or_zero(
                     material,
                     self.section,
                     &local.y[..n],
@@ -232,10 +239,14 @@ impl Model {
                         let bases = &self.element_blocks[e * n * n..(e + 1) * n * n];
                         let first = &self.element_block_first[e * n * n..(e + 1) * n * n];
                         let k = &local.k[..m * m];
+                        // A zero element Hessian (with pressure, the
+                        // pressure's tangent is in `k`) only writes the
+                        // blocks it is first in.
+                        let zero = zero && pressure == 0.0;
                         match n {
-                            3 => scatter::<3>(self, h_ptr, el, k, bases, first),
-                            6 => scatter::<6>(self, h_ptr, el, k, bases, first),
-                            _ => scatter::<10>(self, h_ptr, el, k, bases, first),
+                            3 => scatter::<3>(self, h_ptr, el, k, bases, first, zero),
+                            6 => scatter::<6>(self, h_ptr, el, k, bases, first, zero),
+                            _ => scatter::<10>(self, h_ptr, el, k, bases, first, zero),
                         }
                     }
                 }

@@ -1,0 +1,65 @@
+//! The pedestal's element loop at a draped state: `cargo run --release -p
+//! drape-bench --example kernel` times assemblies with and without the
+//! Hessian after advancing the reference problem 300 steps.
+
+use drape::scenario::Scenario;
+use std::path::Path;
+use std::time::Instant;
+
+fn main() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/fabric-on-pedestal.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let s = Scenario::parse(&text, &path)
+        .unwrap()
+        .build(&path, &text)
+        .unwrap();
+    let drape::scenario::Analysis::Dynamic { newmark, segments } = &s.analysis else {
+        panic!("dynamic")
+    };
+    let model = &s.model;
+    let mut ws = drape::integrator::newmark::DynamicWorkspace::new(model).unwrap();
+    let mut state = newmark.initial_state(model, &mut ws).unwrap();
+    let length = drape::simulation::reference_length(&model.initial_positions());
+    let mut left = 300;
+    'outer: for &(steps, dt) in segments {
+        for _ in 0..steps {
+            newmark
+                .step(model, &mut state, dt, &s.newton, length, &mut ws)
+                .unwrap();
+            left -= 1;
+            if left == 0 {
+                break 'outer;
+            }
+        }
+    }
+    let y = &state.positions;
+    let dofs = model.dofs();
+    let (mut fi, mut fe) = (vec![0.0; dofs], vec![0.0; dofs]);
+    let mut h = vec![0.0; model.pattern.nnz()];
+    println!("states: {:?}", model.state_fractions(y));
+    for _ in 0..3 {
+        let reps = 3000;
+        let t = Instant::now();
+        for _ in 0..reps {
+            std::hint::black_box(model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h)));
+        }
+        let th = t.elapsed().as_secs_f64() / reps as f64;
+        let t = Instant::now();
+        for _ in 0..reps {
+            std::hint::black_box(model.assemble(y, 0.0, &mut fi, &mut fe, None));
+        }
+        let tf = t.elapsed().as_secs_f64() / reps as f64;
+        println!(
+            "force+hessian {:.1} us ({:.0} ns/element), force {:.1} us ({:.0} ns/element)",
+            th * 1e6,
+            th * 1e9 / model.mesh.element_count() as f64,
+            tf * 1e6,
+            tf * 1e9 / model.mesh.element_count() as f64
+        );
+    }
+    let s: f64 = h.iter().map(|v| v.abs()).sum();
+    println!(
+        "checksum {s:e} {:e}",
+        fi.iter().map(|v| v.abs()).sum::<f64>()
+    );
+}
