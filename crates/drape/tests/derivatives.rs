@@ -74,6 +74,42 @@ fn as_points(y: &[f64]) -> Vec<[f64; 3]> {
     y.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
 }
 
+/// The element force at `y` (flattened).
+fn element_force(
+    material: &dyn drape::material::Material,
+    section: Section,
+    grad: &[[f64; 2]],
+    weight: &[f64],
+    y: &[f64],
+) -> Vec<f64> {
+    let mut f = vec![0.0; y.len()];
+    element_force_hessian(material, section, &as_points(y), grad, weight, &mut f, None);
+    f
+}
+
+/// The element Hessian at `y` (flattened), row-major; written over NaN,
+/// so an entry the kernel leaves unwritten shows.
+fn element_hessian(
+    material: &dyn drape::material::Material,
+    section: Section,
+    grad: &[[f64; 2]],
+    weight: &[f64],
+    y: &[f64],
+) -> Vec<f64> {
+    let m = y.len();
+    let (mut f, mut k) = (vec![0.0; m], vec![f64::NAN; m * m]);
+    element_force_hessian(
+        material,
+        section,
+        &as_points(y),
+        grad,
+        weight,
+        &mut f,
+        Some(&mut k),
+    );
+    k
+}
+
 #[test]
 fn internal_force_and_hessian_match_finite_differences_for_every_order() {
     let material = SaintVenantKirchhoff::new(2.0e6, 0.3);
@@ -90,32 +126,8 @@ fn internal_force_and_hessian_match_finite_differences_for_every_order() {
             let m = y0.len();
             let energy =
                 |y: &[f64]| element_energy(&material, section, &as_points(y), grad, weight);
-            let force = |y: &[f64]| {
-                let mut f = vec![0.0; m];
-                element_force_hessian(
-                    &material,
-                    section,
-                    &as_points(y),
-                    grad,
-                    weight,
-                    &mut f,
-                    None,
-                );
-                f
-            };
-            let hessian = |y: &[f64]| {
-                let (mut f, mut k) = (vec![0.0; m], vec![0.0; m * m]);
-                element_force_hessian(
-                    &material,
-                    section,
-                    &as_points(y),
-                    grad,
-                    weight,
-                    &mut f,
-                    Some(&mut k),
-                );
-                k
-            };
+            let force = |y: &[f64]| element_force(&material, section, grad, weight, y);
+            let hessian = |y: &[f64]| element_hessian(&material, section, grad, weight, y);
             let ge = gradient_error(energy, force, &y0, 1e-6);
             let he = jacobian_error(force, hessian, &y0, 1e-6);
             assert!(ge < TOL, "{order:?} seed {seed}: force vs energy {ge:e}");
@@ -207,7 +219,6 @@ fn wrinkling_element_hessians_match_finite_differences_in_every_state_and_mixtur
             let p = order.degree();
             let geo = ElementGeometry::new(&mesh, &QuadratureRule::of_degree(4 * (p - 1)));
             let (grad, weight) = geo.element(0);
-            let m = 3 * mesh.nodes.len();
             for (name, sx, sy, gradient) in cases {
                 let y0: Vec<f64> = mesh
                     .nodes
@@ -217,32 +228,8 @@ fn wrinkling_element_hessians_match_finite_differences_in_every_state_and_mixtur
                         [stretch * x[0], sy * x[1] + 0.01 * x[0], x[2]]
                     })
                     .collect();
-                let force = |y: &[f64]| {
-                    let mut f = vec![0.0; m];
-                    element_force_hessian(
-                        &material,
-                        section,
-                        &as_points(y),
-                        grad,
-                        weight,
-                        &mut f,
-                        None,
-                    );
-                    f
-                };
-                let hessian = |y: &[f64]| {
-                    let (mut f, mut k) = (vec![0.0; m], vec![f64::NAN; m * m]);
-                    element_force_hessian(
-                        &material,
-                        section,
-                        &as_points(y),
-                        grad,
-                        weight,
-                        &mut f,
-                        Some(&mut k),
-                    );
-                    k
-                };
+                let force = |y: &[f64]| element_force(&material, section, grad, weight, y);
+                let hessian = |y: &[f64]| element_hessian(&material, section, grad, weight, y);
                 // The states of the quadrature points.
                 let n = mesh.nodes.len();
                 let points = as_points(&y0);
