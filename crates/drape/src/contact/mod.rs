@@ -374,4 +374,60 @@ mod tests {
             all.len()
         );
     }
+
+    /// `admit_penetrating` admits each free, inactive node that is inside
+    /// an obstacle, on the body it is deepest in, and nothing else; a
+    /// second call finds nothing more to admit.
+    #[test]
+    fn admitting_penetrating_nodes_takes_the_deepest_body_of_free_inactive_nodes() {
+        let model = ContactModel {
+            bodies: vec![
+                RigidBody {
+                    shape: Box::new(
+                        BoxObstacle::new([-0.05, -0.05, -0.25], [0.05, 0.05, -0.05])
+                            .expect("a box"),
+                    ),
+                    velocity: [0.0; 3],
+                },
+                RigidBody {
+                    shape: Box::new(SphereObstacle::new([0.0, 0.0, -0.1], 0.06).expect("a sphere")),
+                    velocity: [0.0; 3],
+                },
+            ],
+            method: ContactMethod::Lagrange,
+        };
+        let y = [
+            0.0, 0.0, 0.01, // 0: above both: free
+            0.03, 0.0, -0.051, // 1: 1 mm into the box, 2.6 mm into the sphere
+            0.0, 0.0, -0.049, // 2: 9 mm into the sphere, above the box
+            0.02, 0.02, -0.06, // 3: inside both, but fixed
+            -0.02, 0.0, -0.052, // 4: inside both, already active
+        ];
+        let mut fixed = vec![false; y.len()];
+        fixed[9..12].fill(true);
+        let mut state = model.initial_state(&y);
+        state.active[4] = Some((0, 7));
+        let before = state.active.clone();
+        assert!(model.admit_penetrating(&y, 0.0, &mut state, &fixed, 1.0));
+        let (pairs, _) = model.near_pairs(&y, 0.0, &state, 0.0, true);
+        let deepest = |p: usize| {
+            pairs
+                .iter()
+                .filter(|(q, _, prox)| *q == p && prox.gap < 0.0)
+                .min_by(|a, b| a.2.gap.total_cmp(&b.2.gap))
+                .map(|(_, k, prox)| (*k as u32, prox.feature))
+        };
+        assert_eq!(state.active[0], None);
+        assert_eq!(state.active[1], deepest(1));
+        assert_eq!(
+            state.active[1].map(|a| a.0),
+            Some(1),
+            "deeper in the sphere"
+        );
+        assert_eq!(state.active[2], deepest(2));
+        assert_eq!(state.active[2].map(|a| a.0), Some(1));
+        assert_eq!(state.active[3], None, "fixed");
+        assert_eq!(state.active[4], before[4], "already active");
+        assert!(!model.admit_penetrating(&y, 0.0, &mut state, &fixed, 1.0));
+    }
 }

