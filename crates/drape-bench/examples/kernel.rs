@@ -57,6 +57,40 @@ fn main() {
             tf * 1e9 / model.mesh.element_count() as f64
         );
     }
+    {
+        use drape::solver::block_lu::BlockLu;
+        model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h));
+        model.add_mass_to_hessian(1e8, &mut h);
+        let (ptr, rows) = model.pattern.node_graph();
+        let mut lu = BlockLu::new(ptr, rows).unwrap();
+        lu.factorize(&h, false).unwrap();
+        let b: Vec<f64> = (0..dofs).map(|i| (i as f64 * 0.37).sin()).collect();
+        let mut x = b.clone();
+        for _ in 0..3 {
+            let reps = 5000;
+            let t = Instant::now();
+            for _ in 0..reps {
+                x.copy_from_slice(&b);
+                lu.solve_in_place(&mut x);
+                std::hint::black_box(&x);
+            }
+            let ts = t.elapsed().as_secs_f64() / reps as f64;
+            let t = Instant::now();
+            for _ in 0..reps / 5 {
+                lu.factorize(&h, false).unwrap();
+            }
+            let tf = t.elapsed().as_secs_f64() / (reps / 5) as f64;
+            println!(
+                "block LU: solve {:.1} us, factorize {:.1} us",
+                ts * 1e6,
+                tf * 1e6
+            );
+        }
+        println!(
+            "solution checksum {:e}",
+            x.iter().map(|v| v.abs()).sum::<f64>()
+        );
+    }
     let s: f64 = h.iter().map(|v| v.abs()).sum();
     println!(
         "checksum {s:e} {:e}",

@@ -39,8 +39,17 @@
 //! [`MAX_ACTIVE_SET_ROUNDS`] rounds fails the step, which is then cut back.
 //! Each step starts from the set of the step before with the nodes that
 //! penetrate at the predictor admitted
-//! ([`ContactModel::admit_penetrating`]): on the pedestal, 89 re-solutions
-//! of a step instead of 129.
+//! ([`ContactModel::admit_penetrating`]), and the set is revised by the
+//! same rule after each of the first Newton steps that change it, up to
+//! [`REVISIONS_IN_NEWTON`] times, Newton then going on with the new set
+//! from where it is (a primal–dual active-set strategy within Newton;
+//! the check after convergence stays the arbiter, and the bound keeps a
+//! node from switching back and forth within one solution). A set that
+//! Newton's early iterates already show need not wait for convergence
+//! and a whole new solution. Newton iterations of the pedestal with
+//! multipliers: 1,165 with the set of the step before only, 1,067 with
+//! the predictor's admissions, 992 with the revisions too (2 and 4
+//! revisions alike, 1: 1,006).
 
 use super::{ContactModel, ContactState, Proximity};
 use crate::solver::SparsePattern;
@@ -48,6 +57,10 @@ use crate::vec3::{cross, dot, norm, scale};
 
 /// Most re-solutions of one step for a changing active set.
 pub const MAX_ACTIVE_SET_ROUNDS: usize = 20;
+
+/// Most revisions of the active set between the Newton steps of one
+/// solution (see the module docs).
+pub const REVISIONS_IN_NEWTON: usize = 2;
 
 /// An active node during one Newton iteration.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -8,7 +8,7 @@ pub mod statics;
 pub use newmark::Newmark;
 pub use statics::StaticStepper;
 
-use crate::contact::lagrange::{ActiveNode, MAX_ACTIVE_SET_ROUNDS};
+use crate::contact::lagrange::{ActiveNode, MAX_ACTIVE_SET_ROUNDS, REVISIONS_IN_NEWTON};
 use crate::contact::{ContactMethod, ContactModel, ContactState};
 use crate::model::Model;
 use crate::solver::newton::{
@@ -69,8 +69,13 @@ pub(crate) struct StepSystem<'a> {
     pub pressure: f64,
     /// Time at the end of the step (obstacle positions).
     pub time: f64,
-    /// Contact state of the step (hints, active set), fixed during Newton.
-    pub contact: Option<&'a ContactState>,
+    /// Contact state of the step (hints, active set); the active set
+    /// changes during Newton only through [`NewtonSystem::revise`].
+    pub contact: Option<&'a mut ContactState>,
+    /// Mesh size `|X|` (m), for the active set's penetration tolerance.
+    pub length: f64,
+    /// Revisions of the active set left in this Newton solve.
+    pub revisions: usize,
     /// Last evaluation's internal and external forces, and `M Y`.
     pub f_int: &'a mut [f64],
     pub f_ext: &'a mut [f64],
@@ -118,7 +123,7 @@ impl NewtonSystem for StepSystem<'_> {
                 g[i] = self.f_int[i] - self.f_ext[i];
             }
         }
-        if let (Some(contact), Some(state)) = (&model.contact, self.contact)
+        if let (Some(contact), Some(state)) = (&model.contact, self.contact.as_deref())
             && let ContactMethod::Penalty { stiffness } = contact.method
         {
             contact.add_penalty(
@@ -132,7 +137,7 @@ impl NewtonSystem for StepSystem<'_> {
         }
         model.apply_supports(g, h.as_deref_mut());
         let mut merit = None;
-        if let (Some(contact), Some(state)) = (&model.contact, self.contact)
+        if let (Some(contact), Some(state)) = (&model.contact, self.contact.as_deref())
             && contact.method == ContactMethod::Lagrange
         {
             let mut active = contact.active_nodes(y, self.time, state, &model.fixed);
@@ -158,6 +163,29 @@ impl NewtonSystem for StepSystem<'_> {
 
     fn transform_increment(&self, dy: &mut [f64]) {
         ContactModel::rotate_back(&self.active, dy);
+    }
+
+    /// Multipliers: the active set revised after a Newton step, as after
+    /// convergence ([`ContactModel::update_active_set`]), at most
+    /// [`REVISIONS_IN_NEWTON`] times per Newton solve.
+    fn revise(&mut self, y: &[f64], increment: f64) -> bool {
+        let _ = increment;
+        if self.revisions == 0 {
+            return false;
+        }
+        let model = self.model;
+        let (Some(cm), Some(state)) = (&model.contact, self.contact.as_deref_mut()) else {
+            return false;
+        };
+        if cm.method != ContactMethod::Lagrange {
+            return false;
+        }
+        let changed =
+            cm.update_active_set(y, self.time, state, &self.active, &model.fixed, self.length);
+        if changed {
+            self.revisions -= 1;
+        }
+        changed
     }
 }
 
@@ -210,7 +238,9 @@ pub(crate) fn solve_step(
             dead: terms.dead,
             pressure: terms.pressure,
             time: terms.time,
-            contact: contact.as_ref(),
+            contact: contact.as_mut(),
+            length,
+            revisions: REVISIONS_IN_NEWTON,
             f_int: &mut *f_int,
             f_ext: &mut *f_ext,
             my: &mut *my,

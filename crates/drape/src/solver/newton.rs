@@ -32,6 +32,11 @@
 //! (the function `chord_steps`); the convergence test is the same for
 //! either kind of increment.
 //!
+//! A system may revise itself after a Newton step
+//! ([`NewtonSystem::revise`]: the active set of contact by multipliers);
+//! its residual and Hessian are then evaluated again, and the iteration
+//! goes on with no step of the old system counting towards convergence.
+//!
 //! NaN or infinite residuals, a residual that grows by `1e8` over the
 //! first one, and running out of linear solves (Newton iterations and
 //! chord steps together) are errors that the time integrator answers by
@@ -141,6 +146,14 @@ pub trait NewtonSystem {
     /// Maps the solution of `H dY = -G` to the increment of `Y` (for systems
     /// solved in rotated local bases). Default: the identity.
     fn transform_increment(&self, _dy: &mut [f64]) {}
+
+    /// After a Newton step to `y` (whose residual was just evaluated), with
+    /// `increment` its `|dY| / |X|`: lets the system revise its
+    /// constraints; returns whether it changed (then `G` and `H` are
+    /// evaluated again at `y`). Default: never.
+    fn revise(&mut self, _y: &[f64], _increment: f64) -> bool {
+        false
+    }
 }
 
 /// Buffers reused across Newton iterations and steps.
@@ -295,6 +308,16 @@ pub fn solve(
         increment = alpha * norm(&ws.dy) / length;
         report.increments.push(increment);
         report.iterations += 1;
+        if system.revise(y, increment) {
+            // Another system from here on: its residual and Hessian at `y`,
+            // and no step of the old one counts towards convergence.
+            eval = system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]));
+            have_hessian = true;
+            residual = eval.merit.unwrap_or_else(|| norm(&ws.g));
+            report.residuals.push(residual);
+            increment = f64::INFINITY;
+            continue;
+        }
         // Chord steps only where Newton already contracts fast: a full
         // step at most a quarter of the one before, or one that cut the
         // residual a hundredfold — the local regime where the Hessian
@@ -398,4 +421,97 @@ fn chord_steps(
         moved = true;
     }
     moved
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `G(y) = A y + y^3 / 10 - b` (cubes by component) on three unknowns,
+    /// with `A` symmetric positive definite; a revision swaps `b` for
+    /// `b_revised`.
+    struct Cubic {
+        b: [f64; 3],
+        b_revised: [f64; 3],
+        revisions: usize,
+        seen: Vec<f64>,
+    }
+
+    const A: [[f64; 3]; 3] = [[4.0, 1.0, 0.0], [1.0, 3.0, 0.5], [0.0, 0.5, 2.0]];
+
+    impl Cubic {
+        fn residual(y: &[f64], b: &[f64; 3]) -> Vec<f64> {
+            (0..3)
+                .map(|i| (0..3).map(|j| A[i][j] * y[j]).sum::<f64>() + 0.1 * y[i].powi(3) - b[i])
+                .collect()
+        }
+    }
+
+    impl NewtonSystem for Cubic {
+        fn evaluate(&mut self, y: &[f64], g: &mut [f64], h: Option<&mut [f64]>) -> Evaluation {
+            g.copy_from_slice(&Self::residual(y, &self.b));
+            if let Some(h) = h {
+                // Dense, column by column.
+                for j in 0..3 {
+                    for i in 0..3 {
+                        h[3 * j + i] = A[i][j] + if i == j { 0.3 * y[i] * y[i] } else { 0.0 };
+                    }
+                }
+            }
+            Evaluation {
+                scale: self.b.iter().map(|v| v.abs()).sum::<f64>() + 1.0,
+                symmetric: true,
+                merit: None,
+            }
+        }
+
+        fn revise(&mut self, _y: &[f64], increment: f64) -> bool {
+            self.seen.push(increment);
+            if self.revisions == 0 {
+                return false;
+            }
+            self.revisions -= 1;
+            self.b = self.b_revised;
+            true
+        }
+    }
+
+    fn workspace() -> NewtonWorkspace {
+        let col_ptr = [0, 3, 6, 9];
+        let row_idx = [0, 1, 2, 0, 1, 2, 0, 1, 2];
+        NewtonWorkspace::new(3, 9, LinearSolver::new(&col_ptr, &row_idx).unwrap())
+    }
+
+    /// A revision after the first Newton step: Newton goes on with the new
+    /// system, to its root, and is told each step's increment.
+    #[test]
+    fn a_revised_system_is_solved_from_where_newton_is() {
+        let settings = NewtonSettings::default();
+        for revisions in [0, 1] {
+            let mut system = Cubic {
+                b: [1.0, 2.0, 3.0],
+                b_revised: [-2.0, 0.5, 1.0],
+                revisions,
+                seen: Vec::new(),
+            };
+            let mut y = [0.0; 3];
+            let report = solve(&mut system, &mut y, 1.0, &settings, &mut workspace()).unwrap();
+            let b = if revisions == 0 {
+                [1.0, 2.0, 3.0]
+            } else {
+                [-2.0, 0.5, 1.0]
+            };
+            let g = Cubic::residual(&y, &b);
+            assert!(g.iter().all(|v| v.abs() < 1e-10), "{revisions}: {g:?}");
+            // Every Newton step (not the chord steps) was offered for
+            // revision, with its increment.
+            assert_eq!(system.seen.len(), report.iterations);
+            assert!(system.seen.iter().all(|d| report.increments.contains(d)));
+            // The revision's own evaluation is among the residuals.
+            assert_eq!(
+                report.residuals.len(),
+                1 + report.iterations + report.chord_steps + revisions
+            );
+        }
+    }
 }
