@@ -168,8 +168,7 @@ impl NewtonSystem for StepSystem<'_> {
     /// Multipliers: the active set revised after a Newton step, as after
     /// convergence ([`ContactModel::update_active_set`]), at most
     /// [`REVISIONS_IN_NEWTON`] times per Newton solve.
-    fn revise(&mut self, y: &[f64], increment: f64) -> bool {
-        let _ = increment;
+    fn revise(&mut self, y: &[f64]) -> bool {
         if self.revisions == 0 {
             return false;
         }
