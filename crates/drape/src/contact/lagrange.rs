@@ -79,7 +79,11 @@ pub struct ActiveNode {
     pub multiplier: f64,
 }
 
-/// An orthonormal basis `[t1, t2, n]` (rows) around the unit normal `n`.
+/// An orthonormal basis `[t1, t2, n]` (rows) around the unit normal `n`:
+/// `t1` the coordinate axis least aligned with `n`, made orthogonal to it,
+/// and `t2 = n x t1`. For `n = e_z` (a node on the top of a box, on a
+/// floor) this is the identity, which [`ContactModel::impose_lagrange`]
+/// then does not apply.
 pub fn frame(n: [f64; 3]) -> [[f64; 3]; 3] {
     let axis = if n[0].abs() <= n[1].abs() && n[0].abs() <= n[2].abs() {
         [1.0, 0.0, 0.0]
@@ -88,11 +92,15 @@ pub fn frame(n: [f64; 3]) -> [[f64; 3]; 3] {
     } else {
         [0.0, 0.0, 1.0]
     };
-    let t1 = cross(n, axis);
+    let along = dot(axis, n);
+    let t1 = [0, 1, 2].map(|i| axis[i] - along * n[i]);
     let t1 = scale(t1, 1.0 / norm(t1));
     let t2 = cross(n, t1);
     [t1, t2, n]
 }
+
+/// The frame of the normal `e_z`, which leaves a node's unknowns as they are.
+const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
 impl ContactModel {
     /// The active nodes of `state` at positions `y`, time `t`, with their
@@ -147,8 +155,10 @@ impl ContactModel {
             a.multiplier = dot(a.proximity.normal, gp);
         }
         let Some((h, pattern)) = h else {
-            for a in active.iter() {
+            for a in active.iter().filter(|a| a.frame != IDENTITY) {
                 rotate_residual(a, g);
+            }
+            for a in active.iter() {
                 g[3 * a.node + 2] = a.scale * a.proximity.gap;
             }
             return norm_of(g);
@@ -172,8 +182,8 @@ impl ContactModel {
         // H <- Q^T H Q: right-multiply column block p, left-multiply row block p.
         // (Blocks located once each: entry (i, j) of a block at
         // `base + j stride + i`; block (p, b) found as the mirror of block
-        // (b, p)'s first entry, no search.)
-        for a in active.iter() {
+        // (b, p)'s first entry, no search.) Nothing to do for `Q = I`.
+        for a in active.iter().filter(|a| a.frame != IDENTITY) {
             let p = a.node;
             let q = a.frame;
             let (_, stride_p) = pattern.block_layout(ptr[p], p);
@@ -308,5 +318,41 @@ fn rotate_residual(a: &ActiveNode, g: &mut [f64]) {
     let gp = [g[3 * p], g[3 * p + 1], g[3 * p + 2]];
     for i in 0..3 {
         g[3 * p + i] = dot(a.frame[i], gp);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Frames are orthonormal and right-handed with `n` last; `e_z` gets
+    /// the identity (whose rotation `impose_lagrange` skips).
+    #[test]
+    fn frames_are_orthonormal_and_the_identity_for_e_z() {
+        assert_eq!(frame([0.0, 0.0, 1.0]), IDENTITY);
+        let normals = [
+            [0.0, 0.0, -1.0],
+            [1.0, 0.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.6, 0.0, 0.8],
+            [-0.48, 0.6, 0.64],
+            [1e-9, 1.0, -1e-9],
+        ];
+        for n in normals {
+            let n = scale(n, 1.0 / norm(n));
+            let q = frame(n);
+            assert_eq!(q[2], n);
+            for i in 0..3 {
+                for j in 0..3 {
+                    let expected = if i == j { 1.0 } else { 0.0 };
+                    assert!((dot(q[i], q[j]) - expected).abs() < 1e-15, "{n:?}");
+                }
+            }
+            let c = cross(q[0], q[1]);
+            assert!(
+                (0..3).all(|i| (c[i] - n[i]).abs() < 1e-15),
+                "{n:?}: left-handed"
+            );
+        }
     }
 }
