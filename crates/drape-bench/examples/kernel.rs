@@ -90,6 +90,25 @@ fn main() {
             "solution checksum {:e}",
             x.iter().map(|v| v.abs()).sum::<f64>()
         );
+        let (node_ptr, node_rows) = model.pattern.node_graph();
+        let mut linear =
+            drape::solver::LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx)
+                .unwrap()
+                .with_transpose(model.pattern.transpose_map().to_vec())
+                .with_node_blocks(node_ptr, node_rows);
+        for _ in 0..3 {
+            let reps = 1000;
+            let t = Instant::now();
+            for _ in 0..reps {
+                x.copy_from_slice(&b);
+                linear.solve(&h, false, &mut x).unwrap();
+            }
+            let tl = t.elapsed().as_secs_f64() / reps as f64;
+            println!(
+                "LinearSolver::solve (factorise, solve, check) {:.1} us",
+                tl * 1e6
+            );
+        }
     }
     let s: f64 = h.iter().map(|v| v.abs()).sum();
     println!(

@@ -235,7 +235,7 @@ impl ContactModel {
 
     /// Rotates the increments of the active nodes back from their local bases.
     pub fn rotate_back(active: &[ActiveNode], dy: &mut [f64]) {
-        for a in active {
+        for a in active.iter().filter(|a| a.frame != IDENTITY) {
             let p = a.node;
             let z = [dy[3 * p], dy[3 * p + 1], dy[3 * p + 2]];
             for i in 0..3 {
