@@ -1,6 +1,11 @@
-//! The pedestal's element loop at a draped state: `cargo run --release -p
-//! drape-bench --example kernel` times assemblies with and without the
-//! Hessian after advancing the reference problem 300 steps.
+//! The pedestal's per-iteration work at a draped state: `cargo run
+//! --release -p drape-bench --example kernel` advances the reference
+//! problem 300 steps, then times, at that state, assemblies with and
+//! without the Hessian, the per-step element statistics (state fractions,
+//! smallest stretch), the block LU's factorisation and solve, and the
+//! linear solver's overhead around them (the residual check), each
+//! repeated; `RAYON_NUM_THREADS=1` for one thread. On this machine's
+//! noisy virtual CPUs, compare builds by alternating runs.
 
 use drape::scenario::Scenario;
 use std::path::Path;
@@ -107,6 +112,48 @@ fn main() {
             println!(
                 "LinearSolver::solve (factorise, solve, check) {:.1} us",
                 tl * 1e6
+            );
+        }
+        for _ in 0..3 {
+            let reps = 1000;
+            let (mut ta, mut tb) = (0.0, 0.0);
+            let mut diffs = Vec::new();
+            for _ in 0..reps {
+                x.copy_from_slice(&b);
+                let t = Instant::now();
+                linear.solve(&h, false, &mut x).unwrap();
+                let a = t.elapsed().as_secs_f64();
+                x.copy_from_slice(&b);
+                let t = Instant::now();
+                lu.factorize(&h, false).unwrap();
+                lu.solve_in_place(&mut x);
+                let c = t.elapsed().as_secs_f64();
+                ta += a;
+                tb += c;
+                diffs.push(a - c);
+            }
+            diffs.sort_by(f64::total_cmp);
+            println!("median overhead {:.1} us", diffs[reps / 2] * 1e6);
+            println!(
+                "LinearSolver::solve {:.1} us, bare factorize + solve {:.1} us: overhead {:.1} us",
+                ta / reps as f64 * 1e6,
+                tb / reps as f64 * 1e6,
+                (ta - tb) / reps as f64 * 1e6
+            );
+        }
+        let mut h2 = h.clone();
+        for _ in 0..3 {
+            let reps = 1000;
+            let mut tf = 0.0;
+            for _ in 0..reps {
+                model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h2));
+                let t = Instant::now();
+                lu.factorize(&h, false).unwrap();
+                tf += t.elapsed().as_secs_f64();
+            }
+            println!(
+                "factorize after an assembly {:.1} us",
+                tf / reps as f64 * 1e6
             );
         }
     }
