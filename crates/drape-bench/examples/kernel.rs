@@ -62,6 +62,28 @@ fn main() {
             tf * 1e9 / model.mesh.element_count() as f64
         );
     }
+    for _ in 0..3 {
+        let reps = 3000;
+        let time = |f: &dyn Fn()| {
+            let t = Instant::now();
+            for _ in 0..reps {
+                f();
+            }
+            t.elapsed().as_secs_f64() / reps as f64 * 1e6
+        };
+        let fractions = time(&|| {
+            std::hint::black_box(model.state_fractions(y));
+        });
+        let stretch = time(&|| {
+            std::hint::black_box(model.min_stretch(y));
+        });
+        let both = time(&|| {
+            std::hint::black_box(model.stretch_and_states(y));
+        });
+        println!(
+            "state fractions {fractions:.1} us, min stretch {stretch:.1} us, both in one pass {both:.1} us"
+        );
+    }
     {
         use drape::solver::block_lu::BlockLu;
         model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h));

@@ -340,8 +340,12 @@ impl Model {
 
     /// Mean stress, principal stresses and wrinkling state of element `e`.
     fn element_result(&self, e: usize, y: &[f64]) -> ([f64; 3], [f64; 2], i32) {
+        self.element_result_at(e, &self.element_positions(e, y))
+    }
+
+    /// [`Model::element_result`] with element `e`'s node positions `ye`.
+    fn element_result_at(&self, e: usize, ye: &[[f64; 3]]) -> ([f64; 3], [f64; 2], i32) {
         let n = self.mesh.order.nodes_per_element();
-        let ye = self.element_positions(e, y);
         let (grad, weight) = self.geometry.element(e);
         let (s, _, wrinkle_state) =
             element_stress_state(self.material.as_ref(), self.section, &ye[..n], grad, weight);
@@ -385,35 +389,74 @@ impl Model {
     /// Smallest principal stretch over all quadrature points, `sqrt` of the
     /// smallest eigenvalue of `C = F^T F`, and the element where it occurs.
     pub fn min_stretch(&self, y: &[f64]) -> (f64, usize) {
-        let n = self.mesh.order.nodes_per_element();
-        let least_of = |e: usize| {
-            let ye = self.element_positions(e, y);
-            let (grad, weight) = self.geometry.element(e);
-            let mut least = f64::INFINITY;
-            for q in 0..weight.len() {
-                let f = crate::element::membrane::deformation_gradient(
-                    &ye[..n],
-                    &grad[q * n..(q + 1) * n],
-                );
-                let e2 = crate::element::membrane::green_lagrange(&f);
-                // C = I + 2E; its smallest eigenvalue from E's.
-                let (_, e_min) = principal_values([e2[0], e2[1], 0.5 * e2[2]]);
-                least = least.min((1.0 + 2.0 * e_min).max(0.0).sqrt());
-            }
-            (least, e)
-        };
-        let smaller = |a: (f64, usize), b: (f64, usize)| if b.0 < a.0 { b } else { a };
+        let least_of = |e: usize| (self.least_stretch_at(e, &self.element_positions(e, y)), e);
         let elements = 0..self.mesh.element_count();
         if self.parallel() {
             elements
                 .into_par_iter()
                 .map(least_of)
-                .reduce(|| (f64::INFINITY, 0), smaller)
+                .reduce(|| (f64::INFINITY, 0), smaller_stretch)
         } else {
             let (a, b) = crate::par::halves(elements.len(), |r| {
-                r.map(least_of).fold((f64::INFINITY, 0), smaller)
+                r.map(least_of).fold((f64::INFINITY, 0), smaller_stretch)
             });
-            smaller(a, b)
+            smaller_stretch(a, b)
         }
     }
+
+    /// The smallest principal stretch over element `e`'s quadrature points,
+    /// its nodes at `ye`.
+    fn least_stretch_at(&self, e: usize, ye: &[[f64; 3]]) -> f64 {
+        let n = self.mesh.order.nodes_per_element();
+        let (grad, weight) = self.geometry.element(e);
+        let mut least = f64::INFINITY;
+        for q in 0..weight.len() {
+            let f =
+                crate::element::membrane::deformation_gradient(&ye[..n], &grad[q * n..(q + 1) * n]);
+            let e2 = crate::element::membrane::green_lagrange(&f);
+            // C = I + 2E; its smallest eigenvalue from E's.
+            let (_, e_min) = principal_values([e2[0], e2[1], 0.5 * e2[2]]);
+            least = least.min((1.0 + 2.0 * e_min).max(0.0).sqrt());
+        }
+        least
+    }
+
+    /// [`Model::min_stretch`] and [`Model::state_fractions`] in one pass
+    /// over the elements (the run loop's per-step statistics), the same
+    /// values.
+    pub fn stretch_and_states(&self, y: &[f64]) -> ((f64, usize), [f64; 3]) {
+        type Acc = ((f64, usize), [usize; 3]);
+        let visit = |(least, mut count): Acc, e: usize| -> Acc {
+            let ye = self.element_positions(e, y);
+            count[self.element_result_at(e, &ye).2.clamp(0, 2) as usize] += 1;
+            (
+                smaller_stretch(least, (self.least_stretch_at(e, &ye), e)),
+                count,
+            )
+        };
+        let join = |(la, ca): Acc, (lb, cb): Acc| -> Acc {
+            (
+                smaller_stretch(la, lb),
+                [ca[0] + cb[0], ca[1] + cb[1], ca[2] + cb[2]],
+            )
+        };
+        let start: Acc = ((f64::INFINITY, 0), [0; 3]);
+        let elements = 0..self.mesh.element_count();
+        let (least, count) = if self.parallel() {
+            elements
+                .into_par_iter()
+                .fold(|| start, visit)
+                .reduce(|| start, join)
+        } else {
+            let (a, b) = crate::par::halves(elements.len(), |r| r.fold(start, visit));
+            join(a, b)
+        };
+        let n = self.mesh.element_count().max(1) as f64;
+        (least, count.map(|c| c as f64 / n))
+    }
+}
+
+/// The smaller stretch of two `(stretch, element)`; the first on ties.
+fn smaller_stretch(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
+    if b.0 < a.0 { b } else { a }
 }

@@ -623,4 +623,46 @@ mod tests {
         assert!(h1.iter().zip(&h2).all(|(a, b)| a.to_bits() == b.to_bits()));
         assert!(u1 > 0.0 && h1.iter().any(|&v| v != 0.0));
     }
+
+    /// The run loop's one-pass statistics are `min_stretch` and
+    /// `state_fractions`, bit for bit, on a small mesh (two halves) and on
+    /// one above [`PARALLEL_ABOVE`] (rayon), orders 1 and 2, with taut,
+    /// wrinkled and slack elements.
+    #[test]
+    fn one_pass_statistics_are_min_stretch_and_state_fractions() {
+        for (divisions, order) in [(12, ElementOrder::Quadratic), (48, ElementOrder::Linear)] {
+            let mesh = rectangle(
+                [0.2, 0.2],
+                [divisions, divisions],
+                Pattern::Right,
+                [0.0; 3],
+                order,
+            );
+            let model = wrinkling_model(mesh);
+            for amplitude in [0.0, 0.01, 0.03] {
+                let y: Vec<f64> = model
+                    .initial_positions()
+                    .chunks(3)
+                    .flat_map(|x| {
+                        // Stretches from 0.94 to 1.06 across the mesh.
+                        [
+                            x[0] * (1.0 + 0.3 * x[0]) + amplitude * (7.0 * x[1]).sin(),
+                            x[1] * (1.0 + 0.3 * x[1]),
+                            2.0 * amplitude * (9.0 * x[0]).cos() * x[1],
+                        ]
+                    })
+                    .collect();
+                let ((stretch, element), fractions) = model.stretch_and_states(&y);
+                let (s, e) = model.min_stretch(&y);
+                assert_eq!((stretch.to_bits(), element), (s.to_bits(), e));
+                assert_eq!(fractions, model.state_fractions(&y));
+                if amplitude > 0.0 {
+                    assert!(
+                        fractions.iter().filter(|&&f| f > 0.0).count() >= 2,
+                        "{fractions:?}"
+                    );
+                }
+            }
+        }
+    }
 }

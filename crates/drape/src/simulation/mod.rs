@@ -412,6 +412,7 @@ pub fn run_with(
             scratch: vec![0.0; model.dofs()],
         };
         let strain0 = model.strain_energy(&state.positions);
+        let (stretch0, fractions0) = model.stretch_and_states(&state.positions);
         let contact0 = contact_report(&state);
         history.row(
             &state,
@@ -421,9 +422,9 @@ pub fn run_with(
                 iterations: 0,
                 strain: strain0,
                 cutbacks: 0,
-                min_stretch: model.min_stretch(&state.positions).0,
+                min_stretch: stretch0.0,
                 contact: contact0.clone(),
-                states: model.state_fractions(&state.positions),
+                states: fractions0,
             },
         )?;
         let initial_frame = Snapshot::of(0, &state, contact0.as_ref());
@@ -480,7 +481,8 @@ pub fn run_with(
                                 counters.cutback_steps += 1;
                             }
                             counters.last_strain = outcome.strain_energy;
-                            let (stretch, element) = model.min_stretch(&state.positions);
+                            let ((stretch, element), fractions) =
+                                model.stretch_and_states(&state.positions);
                             last_contact = contact_report(&state);
                             if counters.first_contact_time.is_none()
                                 && last_contact.as_ref().is_some_and(|c| c.active > 0)
@@ -502,7 +504,7 @@ pub fn run_with(
                                     cutbacks: depth,
                                     min_stretch: stretch,
                                     contact: last_contact.clone(),
-                                    states: model.state_fractions(&state.positions),
+                                    states: fractions,
                                 },
                             )?;
                             output_seconds += output_start.elapsed().as_secs_f64();
