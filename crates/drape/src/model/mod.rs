@@ -470,12 +470,10 @@ mod tests {
         .expect("a valid mesh")
     }
 
-    /// Assembly gives the same bits on one thread and on two, on a small
-    /// mesh (the calling thread's loop) and on one above
-    /// [`PARALLEL_ABOVE`] (colours in fixed chunks, summed in order).
-    #[test]
-    fn assembly_does_not_depend_on_the_thread_count() {
-        for (divisions, order) in [(12, ElementOrder::Quadratic), (48, ElementOrder::Linear)] {
+    /// A 20 cm square of quadratic triangles below [`PARALLEL_ABOVE`] and
+    /// one of linear triangles above it.
+    fn small_and_large_meshes() -> [Mesh; 2] {
+        [(12, ElementOrder::Quadratic), (48, ElementOrder::Linear)].map(|(divisions, order)| {
             let mesh = rectangle(
                 [0.2, 0.2],
                 [divisions, divisions],
@@ -484,6 +482,16 @@ mod tests {
                 order,
             );
             assert_eq!(mesh.element_count() >= PARALLEL_ABOVE, divisions == 48);
+            mesh
+        })
+    }
+
+    /// Assembly gives the same bits on one thread and on two, on a small
+    /// mesh (the calling thread's loop) and on one above
+    /// [`PARALLEL_ABOVE`] (colours in fixed chunks, summed in order).
+    #[test]
+    fn assembly_does_not_depend_on_the_thread_count() {
+        for mesh in small_and_large_meshes() {
             assembly_on_one_and_two_threads_agrees(wrinkling_model(mesh));
         }
     }
@@ -630,14 +638,7 @@ mod tests {
     /// wrinkled and slack elements.
     #[test]
     fn one_pass_statistics_are_min_stretch_and_state_fractions() {
-        for (divisions, order) in [(12, ElementOrder::Quadratic), (48, ElementOrder::Linear)] {
-            let mesh = rectangle(
-                [0.2, 0.2],
-                [divisions, divisions],
-                Pattern::Right,
-                [0.0; 3],
-                order,
-            );
+        for mesh in small_and_large_meshes() {
             let model = wrinkling_model(mesh);
             for amplitude in [0.0, 0.01, 0.03] {
                 let y: Vec<f64> = model
