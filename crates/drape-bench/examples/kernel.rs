@@ -85,6 +85,24 @@ fn main() {
         );
     }
     {
+        let reps = 20000;
+        let mut out = vec![0.0; dofs];
+        for _ in 0..3 {
+            let t = Instant::now();
+            for _ in 0..reps {
+                model.mass_times(y, &mut out);
+                std::hint::black_box(&out);
+            }
+            println!("mass times {:.2} us", t.elapsed().as_secs_f64() / reps as f64 * 1e6);
+            let t = Instant::now();
+            for _ in 0..reps {
+                model.add_mass_to_hessian(1.0, &mut h);
+                std::hint::black_box(&h);
+            }
+            println!("add mass to Hessian {:.2} us", t.elapsed().as_secs_f64() / reps as f64 * 1e6);
+        }
+    }
+    {
         use drape::solver::block_lu::BlockLu;
         model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h));
         model.add_mass_to_hessian(1e8, &mut h);
