@@ -93,13 +93,19 @@ fn main() {
                 model.mass_times(y, &mut out);
                 std::hint::black_box(&out);
             }
-            println!("mass times {:.2} us", t.elapsed().as_secs_f64() / reps as f64 * 1e6);
+            println!(
+                "mass times {:.2} us",
+                t.elapsed().as_secs_f64() / reps as f64 * 1e6
+            );
             let t = Instant::now();
             for _ in 0..reps {
                 model.add_mass_to_hessian(1.0, &mut h);
                 std::hint::black_box(&h);
             }
-            println!("add mass to Hessian {:.2} us", t.elapsed().as_secs_f64() / reps as f64 * 1e6);
+            println!(
+                "add mass to Hessian {:.2} us",
+                t.elapsed().as_secs_f64() / reps as f64 * 1e6
+            );
         }
     }
     {

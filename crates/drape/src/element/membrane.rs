@@ -88,14 +88,23 @@ pub fn element_force_hessian(
     grad: &[[f64; 2]],
     weight: &[f64],
     f: &mut [f64],
-    k: Option<&mut [f64]>,
+    mut k: Option<&mut [f64]>,
 ) -> f64 {
-    element_force_hessian_or_zero(material, section, y, grad, weight, f, k).0
+    let (energy, zero) =
+        element_force_hessian_or_zero(material, section, y, grad, weight, f, k.as_deref_mut());
+    if let Some(k) = k
+        && zero
+    {
+        let m = 3 * y.len();
+        k[..m * m].fill(0.0);
+    }
+    energy
 }
 
 /// [`element_force_hessian`], and whether the Hessian is zero (no
 /// quadrature point with stress or tangent: a slack element in
-/// dynamics), which the assembly then need not add.
+/// dynamics), which the assembly then need not add; `k` is then left as
+/// it was.
 pub(crate) fn element_force_hessian_or_zero(
     material: &dyn Material,
     section: Section,
@@ -215,12 +224,10 @@ fn force_hessian<const N: usize>(
             }
         }
     }
-    if let Some(k) = k {
-        if zero {
-            k[..9 * N * N].fill(0.0);
-        } else {
-            k[..9 * N * N].copy_from_slice(K.as_flattened().as_flattened().as_flattened());
-        }
+    if let Some(k) = k
+        && !zero
+    {
+        k[..9 * N * N].copy_from_slice(K.as_flattened().as_flattened().as_flattened());
     }
     (energy, zero)
 }

@@ -43,8 +43,9 @@ impl Shared {
 
 /// Adds (or, for a block's first element, writes) the element Hessian `k`
 /// (row-major, `3N x 3N`) of an element with nodes `el` into the Hessian
-/// values behind `h`; `zero`: `k` is zero, and only the first elements'
-/// blocks are written. Block `(a, b)` starts at `bases[N a + b]`, its
+/// values behind `h`; `zero`: the element Hessian is zero (`k` is not
+/// read), and only the blocks the element is first in are written, with
+/// zeros. Block `(a, b)` starts at `bases[N a + b]`, its
 /// entry `(i, j)` at `+ j stride_b + i`. With `N` known the loops unroll
 /// and `k`'s indices are constants.
 ///
@@ -71,8 +72,11 @@ fn scatter<const N: usize>(
             if zero && !first[a * N + b] {
                 continue;
             }
-            let block: [f64; 9] =
-                std::array::from_fn(|ij| k[(3 * a + ij % 3) * 3 * N + 3 * b + ij / 3]);
+            let block: [f64; 9] = if zero {
+                [0.0; 9]
+            } else {
+                std::array::from_fn(|ij| k[(3 * a + ij % 3) * 3 * N + 3 * b + ij / 3])
+            };
             // SAFETY: see the function's docs; the indices are those of
             // the pattern's block (a, b).
             unsafe {
@@ -213,6 +217,10 @@ impl Model {
                 );
                 if pressure != 0.0 {
                     local.fp[..m].fill(0.0);
+                    if want_h && zero {
+                        // (Left unwritten by the kernel.)
+                        local.k[..m * m].fill(0.0);
+                    }
                     let k = want_h.then_some(&mut local.k[..m * m]);
                     add_pressure_force(
                         pressure,
@@ -240,8 +248,9 @@ impl Model {
                         let first = &self.element_block_first[e * n * n..(e + 1) * n * n];
                         let k = &local.k[..m * m];
                         // A zero element Hessian (with pressure, the
-                        // pressure's tangent is in `k`) only writes the
-                        // blocks it is first in.
+                        // pressure's tangent is in `k`) only writes zeros
+                        // into the blocks it is first in (`k` is then not
+                        // read: the kernel left it unwritten).
                         let zero = zero && pressure == 0.0;
                         match n {
                             3 => scatter::<3>(self, h_ptr, el, k, bases, first, zero),
