@@ -85,6 +85,11 @@ pub struct ActiveNode {
 /// floor) this is the identity, which [`ContactModel::impose_lagrange`]
 /// then does not apply.
 pub fn frame(n: [f64; 3]) -> [[f64; 3]; 3] {
+    if n == IDENTITY[2] {
+        // (What the construction below gives for it, without a square root
+        // and a division per active node and evaluation.)
+        return IDENTITY;
+    }
     let axis = if n[0].abs() <= n[1].abs() && n[0].abs() <= n[2].abs() {
         [1.0, 0.0, 0.0]
     } else if n[1].abs() <= n[2].abs() {
