@@ -103,8 +103,8 @@ pub fn element_force_hessian(
 
 /// [`element_force_hessian`], and whether the Hessian is zero (no
 /// quadrature point with stress or tangent: a slack element in
-/// dynamics), which the assembly then need not add; `k` is then left as
-/// it was.
+/// dynamics), which the assembly then need not add; `k`'s contents are
+/// then unspecified.
 pub(crate) fn element_force_hessian_or_zero(
     material: &dyn Material,
     section: Section,
@@ -142,22 +142,38 @@ fn force_hessian<const N: usize>(
     f.fill(0.0);
     let t = section.thickness;
     let mut energy = 0.0;
-    // K[a][i][b][j] = k[(3a + i) 3N + 3b + j]: the same row-major layout,
-    // with sizes the compiler knows (no bounds checks in the products).
-    let mut K = [[[[0.0; 3]; N]; 3]; N];
+    // K[a][i][b][j] = k[(3a + i) 3N + 3b + j]: `k` itself seen with sizes
+    // the compiler knows (no bounds checks in the products). One point (a
+    // T3) writes every entry it does not skip, so nothing is zeroed first;
+    // more points add up, into zeros.
+    let mut K = k.map(|k| {
+        &mut k[..9 * N * N]
+            .as_chunks_mut::<3>()
+            .0
+            .as_chunks_mut::<N>()
+            .0
+            .as_chunks_mut::<3>()
+            .0
+            .as_chunks_mut::<N>()
+            .0[0]
+    });
+    let accumulate = weight.len() > 1;
+    if accumulate && let Some(K) = K.as_deref_mut() {
+        *K = [[[[0.0; 3]; N]; 3]; N];
+    }
     let mut zero = true;
     for (q, w) in weight.iter().enumerate() {
         let g: &[[f64; 2]; N] = grad[q * N..(q + 1) * N].try_into().expect("N gradients");
         let F = deformation_gradient(y, g);
         let e = green_lagrange(&F);
         let tw = t * w;
-        if k.is_none() {
+        let Some(K) = K.as_deref_mut() else {
             let (u, s) = material.energy_stress(e);
             let S = [s[0] + section.prestress, s[1] + section.prestress, s[2]];
             energy += tw * (u + section.prestress * (e[0] + e[1]));
             add_force(&F, S, g, tw, f);
             continue;
-        }
+        };
         let r = material.evaluate(e);
         let S = [
             r.stress[0] + section.prestress,
@@ -215,19 +231,21 @@ fn force_hessian<const N: usize>(
                         if j == i {
                             v += sa[0] * gb[0] + sa[1] * gb[1];
                         }
-                        K[a][i][b][j] += v;
-                        if symmetric && b > a {
-                            K[b][j][a][i] += v;
+                        if accumulate {
+                            K[a][i][b][j] += v;
+                            if symmetric && b > a {
+                                K[b][j][a][i] += v;
+                            }
+                        } else {
+                            K[a][i][b][j] = v;
+                            if symmetric && b > a {
+                                K[b][j][a][i] = v;
+                            }
                         }
                     }
                 }
             }
         }
-    }
-    if let Some(k) = k
-        && !zero
-    {
-        k[..9 * N * N].copy_from_slice(K.as_flattened().as_flattened().as_flattened());
     }
     (energy, zero)
 }
