@@ -191,7 +191,7 @@ fn force_hessian<const N: usize>(
         zero = false;
         // A symmetric tangent (taut, slack with a tangent, SVK) gives
         // symmetric blocks, `K_ba = K_ab^T`: only the blocks `a <= b` are
-        // computed, 6 of 9 for a T3, each added to both places.
+        // computed, 6 of 9 for a T3, each entry put in both places.
         let symmetric = D[0][1] == D[1][0] && D[0][2] == D[2][0] && D[1][2] == D[2][1];
         // B[a][i] = d e / d Y^a_i, and DB[a][i] = tw D B[a][i].
         let mut B = [[[0.0; 3]; 3]; N];
