@@ -330,21 +330,44 @@ impl Model {
     /// (as [`ElementResults::state_fractions`], without storing the
     /// per-element results).
     pub fn state_fractions(&self, y: &[f64]) -> [f64; 3] {
-        let count = |e: usize| {
-            let mut c = [0usize; 3];
-            c[self.element_result(e, y).2.clamp(0, 2) as usize] = 1;
-            c
-        };
-        let add = |a: [usize; 3], b: [usize; 3]| [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
-        let elements = 0..self.mesh.element_count();
-        let total = if self.parallel() {
-            elements.into_par_iter().map(count).reduce(|| [0; 3], add)
-        } else {
-            let (a, b) = crate::par::halves(elements.len(), |r| r.map(count).fold([0; 3], add));
-            add(a, b)
-        };
+        let counts = self.fold_elements(
+            [0; 3],
+            |mut count, e| {
+                count[self.element_result(e, y).2.clamp(0, 2) as usize] += 1;
+                count
+            },
+            add_counts,
+        );
+        self.fractions(counts)
+    }
+
+    /// `counts` of taut, wrinkled and slack elements as fractions.
+    fn fractions(&self, counts: [usize; 3]) -> [f64; 3] {
         let n = self.mesh.element_count().max(1) as f64;
-        total.map(|c| c as f64 / n)
+        counts.map(|c| c as f64 / n)
+    }
+
+    /// `visit` folded over the elements from `start`, the partial results
+    /// joined by `join`: in two halves of the elements on two threads
+    /// ([`crate::par`]), or for large meshes on rayon's pool. `join` must
+    /// not depend on how the elements were split (a sum of counts, the
+    /// first of the smallest values) for the result not to.
+    fn fold_elements<T: Copy + Send + Sync>(
+        &self,
+        start: T,
+        visit: impl Fn(T, usize) -> T + Sync + Send,
+        join: impl Fn(T, T) -> T + Sync + Send,
+    ) -> T {
+        let elements = 0..self.mesh.element_count();
+        if self.parallel() {
+            elements
+                .into_par_iter()
+                .fold(|| start, &visit)
+                .reduce(|| start, &join)
+        } else {
+            let (a, b) = crate::par::halves(elements.len(), |r| r.fold(start, &visit));
+            join(a, b)
+        }
     }
 
     /// Mean stress, principal stresses and wrinkling state of element `e`.
@@ -398,19 +421,14 @@ impl Model {
     /// Smallest principal stretch over all quadrature points, `sqrt` of the
     /// smallest eigenvalue of `C = F^T F`, and the element where it occurs.
     pub fn min_stretch(&self, y: &[f64]) -> (f64, usize) {
-        let least_of = |e: usize| (self.least_stretch_at(e, &self.element_positions(e, y)), e);
-        let elements = 0..self.mesh.element_count();
-        if self.parallel() {
-            elements
-                .into_par_iter()
-                .map(least_of)
-                .reduce(|| (f64::INFINITY, 0), smaller_stretch)
-        } else {
-            let (a, b) = crate::par::halves(elements.len(), |r| {
-                r.map(least_of).fold((f64::INFINITY, 0), smaller_stretch)
-            });
-            smaller_stretch(a, b)
-        }
+        self.fold_elements(
+            (f64::INFINITY, 0),
+            |least, e| {
+                let stretch = self.least_stretch_at(e, &self.element_positions(e, y));
+                smaller_stretch(least, (stretch, e))
+            },
+            smaller_stretch,
+        )
     }
 
     /// The smallest principal stretch over element `e`'s quadrature points,
@@ -434,35 +452,23 @@ impl Model {
     /// over the elements (the run loop's per-step statistics), the same
     /// values.
     pub fn stretch_and_states(&self, y: &[f64]) -> ((f64, usize), [f64; 3]) {
-        type Acc = ((f64, usize), [usize; 3]);
-        let visit = |(least, mut count): Acc, e: usize| -> Acc {
-            let ye = self.element_positions(e, y);
-            count[self.element_result_at(e, &ye).2.clamp(0, 2) as usize] += 1;
-            (
-                smaller_stretch(least, (self.least_stretch_at(e, &ye), e)),
-                count,
-            )
-        };
-        let join = |(la, ca): Acc, (lb, cb): Acc| -> Acc {
-            (
-                smaller_stretch(la, lb),
-                [ca[0] + cb[0], ca[1] + cb[1], ca[2] + cb[2]],
-            )
-        };
-        let start: Acc = ((f64::INFINITY, 0), [0; 3]);
-        let elements = 0..self.mesh.element_count();
-        let (least, count) = if self.parallel() {
-            elements
-                .into_par_iter()
-                .fold(|| start, visit)
-                .reduce(|| start, join)
-        } else {
-            let (a, b) = crate::par::halves(elements.len(), |r| r.fold(start, visit));
-            join(a, b)
-        };
-        let n = self.mesh.element_count().max(1) as f64;
-        (least, count.map(|c| c as f64 / n))
+        let (least, counts) = self.fold_elements(
+            ((f64::INFINITY, 0), [0; 3]),
+            |(least, mut count), e| {
+                let ye = self.element_positions(e, y);
+                count[self.element_result_at(e, &ye).2.clamp(0, 2) as usize] += 1;
+                let stretch = self.least_stretch_at(e, &ye);
+                (smaller_stretch(least, (stretch, e)), count)
+            },
+            |(la, ca), (lb, cb)| (smaller_stretch(la, lb), add_counts(ca, cb)),
+        );
+        (least, self.fractions(counts))
     }
+}
+
+/// Element counts per state, summed.
+fn add_counts(a: [usize; 3], b: [usize; 3]) -> [usize; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
 /// The smaller stretch of two `(stretch, element)`; the first on ties.
