@@ -175,9 +175,9 @@ impl Checkpoint {
         }
         let mut r = Reader { bytes: body, at: 8 };
         let version = r.u32()?;
-        if version != VERSION && version != 1 {
+        if !(1..=VERSION).contains(&version) {
             return Err(bad(&format!(
-                "version {version}, this drape reads version {VERSION}"
+                "version {version}, this drape reads versions 1 to {VERSION}"
             )));
         }
         let hash = r.u64()?;
@@ -386,7 +386,8 @@ mod tests {
     }
 
     /// Version 1 files resume with the persistence 1 (the predictor they
-    /// were written with); a persistence outside [0, 1] is refused.
+    /// were written with); a persistence outside [0, 1] and a version this
+    /// drape does not know are refused.
     #[test]
     fn reads_version_1_and_refuses_a_persistence_out_of_range() {
         let c = sample(true);
@@ -399,5 +400,17 @@ mod tests {
         bad.state.persistence = 1.5;
         let e = Checkpoint::from_bytes(&bad.to_bytes(), 6, 2, 0xdead_beef).unwrap_err();
         assert!(e.to_string().contains("persistence 1.5"), "{e}");
+        // A later version is refused by name.
+        let mut later = as_version_1(&bad.to_bytes());
+        later.truncate(later.len() - 8);
+        later[8..12].copy_from_slice(&3u32.to_le_bytes());
+        let hash = fnv1a(&later);
+        later.extend_from_slice(&hash.to_le_bytes());
+        let e = Checkpoint::from_bytes(&later, 6, 2, 0xdead_beef).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("version 3, this drape reads versions 1 to 2"),
+            "{e}"
+        );
     }
 }
