@@ -235,40 +235,38 @@ fn persistence(old: &[f64], new: &[f64], ratios: &mut Vec<f64>) -> f64 {
 mod tests {
     use super::persistence;
 
-    #[test]
-    fn persistence_is_the_lower_decile_of_the_nodes_ratios() {
-        let mut scratch = Vec::new();
-        // Twenty nodes: A_{s+1} = r_a A_s with r_a = a / 10 - 0.5 (so
-        // -0.5 ... 1.4, clamped to 0 ... 1), in a shuffled order, plus
-        // two nodes at rest that do not count.
-        let mut old = Vec::new();
-        let mut new = Vec::new();
-        for a in [
-            7, 3, 19, 0, 12, 5, 16, 1, 9, 14, 2, 18, 11, 6, 4, 17, 8, 13, 10, 15,
-        ] {
-            let r = a as f64 / 10.0 - 0.5;
-            let v = [1.0 + a as f64, -2.0, 0.5 * a as f64];
+    /// Twenty nodes in a shuffled order (node `k` is number `ORDER[k]`).
+    const ORDER: [usize; 20] = [
+        7, 3, 19, 0, 12, 5, 16, 1, 9, 14, 2, 18, 11, 6, 4, 17, 8, 13, 10, 15,
+    ];
+
+    /// `A_s` of the twenty nodes and of two nodes at rest, flattened, and
+    /// `A_{s+1} = r(a) A_s` for node number `a` (the resting nodes' next
+    /// accelerations given apart).
+    fn accelerations(r: impl Fn(f64) -> f64) -> (Vec<f64>, Vec<f64>) {
+        let (mut old, mut new) = (Vec::new(), Vec::new());
+        for a in ORDER {
+            let a = a as f64;
+            let v = [1.0 + a, -2.0, 0.5 * a];
             old.extend_from_slice(&v);
-            new.extend(v.iter().map(|x| r * x));
+            new.extend(v.iter().map(|x| r(a) * x));
         }
         old.extend_from_slice(&[0.0; 6]);
         new.extend_from_slice(&[3.0, 1.0, 2.0, 0.0, 0.0, 0.0]);
-        // Sorted clamped ratios: six zeros (a = 0..5), then 0.1, 0.2, ...
-        // The decile is the third smallest (20 / 10 = 2): 0.
+        (old, new)
+    }
+
+    #[test]
+    fn persistence_is_the_lower_decile_of_the_nodes_ratios() {
+        let mut scratch = Vec::new();
+        // r = a / 10 - 0.5: -0.5 ... 1.4, clamped to 0 ... 1; the two
+        // nodes at rest do not count. Sorted clamped ratios: six zeros (a
+        // = 0..5), then 0.1, 0.2, ... The decile is the third smallest
+        // (20 / 10 = 2): 0.
+        let (old, new) = accelerations(|a| a / 10.0 - 0.5);
         assert_eq!(persistence(&old, &new, &mut scratch), 0.0);
         // Shifted up by 0.4: ratios a / 10 - 0.1, clamped: 0, 0, 0.1, ...
-        let new: Vec<f64> = old
-            .chunks(3)
-            .enumerate()
-            .flat_map(|(k, v)| {
-                let a = [
-                    7, 3, 19, 0, 12, 5, 16, 1, 9, 14, 2, 18, 11, 6, 4, 17, 8, 13, 10, 15,
-                ]
-                .get(k)
-                .map_or(0.0, |&a| a as f64 / 10.0 - 0.1);
-                v.iter().map(move |x| a * x).collect::<Vec<_>>()
-            })
-            .collect();
+        let (old, new) = accelerations(|a| a / 10.0 - 0.1);
         let rho = persistence(&old, &new, &mut scratch);
         assert!((rho - 0.1).abs() < 1e-12, "{rho}");
         // A steady acceleration persists fully; no acceleration at all: 1.
