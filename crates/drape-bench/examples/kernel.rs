@@ -8,6 +8,9 @@
 //! noisy virtual CPUs, compare builds by alternating runs.
 
 use drape::scenario::Scenario;
+use drape::solver::LinearSolver;
+use drape::solver::block_lu::BlockLu;
+use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
 
@@ -39,173 +42,109 @@ fn main() {
     }
     let y = &state.positions;
     let dofs = model.dofs();
+    let elements = model.mesh.element_count() as f64;
     let (mut fi, mut fe) = (vec![0.0; dofs], vec![0.0; dofs]);
     let mut h = vec![0.0; model.pattern.nnz()];
+    let mut out = vec![0.0; dofs];
     println!("states: {:?}", model.state_fractions(y));
     for _ in 0..3 {
-        let reps = 3000;
-        let t = Instant::now();
-        for _ in 0..reps {
-            std::hint::black_box(model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h)));
-        }
-        let th = t.elapsed().as_secs_f64() / reps as f64;
-        let t = Instant::now();
-        for _ in 0..reps {
-            std::hint::black_box(model.assemble(y, 0.0, &mut fi, &mut fe, None));
-        }
-        let tf = t.elapsed().as_secs_f64() / reps as f64;
+        let with = per_call_us(3000, || {
+            black_box(model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h)));
+        });
+        let without = per_call_us(3000, || {
+            black_box(model.assemble(y, 0.0, &mut fi, &mut fe, None));
+        });
         println!(
-            "force+hessian {:.1} us ({:.0} ns/element), force {:.1} us ({:.0} ns/element)",
-            th * 1e6,
-            th * 1e9 / model.mesh.element_count() as f64,
-            tf * 1e6,
-            tf * 1e9 / model.mesh.element_count() as f64
+            "force+hessian {with:.1} us ({:.0} ns/element), force {without:.1} us ({:.0} ns/element)",
+            with * 1e3 / elements,
+            without * 1e3 / elements
         );
     }
     for _ in 0..3 {
-        let reps = 3000;
-        let time = |f: &dyn Fn()| {
-            let t = Instant::now();
-            for _ in 0..reps {
-                f();
-            }
-            t.elapsed().as_secs_f64() / reps as f64 * 1e6
-        };
-        let fractions = time(&|| {
-            std::hint::black_box(model.state_fractions(y));
+        let fractions = per_call_us(3000, || {
+            black_box(model.state_fractions(y));
         });
-        let stretch = time(&|| {
-            std::hint::black_box(model.min_stretch(y));
+        let stretch = per_call_us(3000, || {
+            black_box(model.min_stretch(y));
         });
-        let both = time(&|| {
-            std::hint::black_box(model.stretch_and_states(y));
+        let both = per_call_us(3000, || {
+            black_box(model.stretch_and_states(y));
         });
         println!(
             "state fractions {fractions:.1} us, min stretch {stretch:.1} us, both in one pass {both:.1} us"
         );
     }
-    {
-        let reps = 20000;
-        let mut out = vec![0.0; dofs];
-        for _ in 0..3 {
-            let t = Instant::now();
-            for _ in 0..reps {
-                model.mass_times(y, &mut out);
-                std::hint::black_box(&out);
-            }
-            println!(
-                "mass times {:.2} us",
-                t.elapsed().as_secs_f64() / reps as f64 * 1e6
-            );
-            let t = Instant::now();
-            for _ in 0..reps {
-                model.add_mass_to_hessian(1.0, &mut h);
-                std::hint::black_box(&h);
-            }
-            println!(
-                "add mass to Hessian {:.2} us",
-                t.elapsed().as_secs_f64() / reps as f64 * 1e6
-            );
-        }
+    for _ in 0..3 {
+        let product = per_call_us(20000, || model.mass_times(y, black_box(&mut out)));
+        let term = per_call_us(20000, || model.add_mass_to_hessian(1.0, black_box(&mut h)));
+        println!("mass times {product:.2} us, add mass to Hessian {term:.2} us");
     }
-    {
-        use drape::solver::block_lu::BlockLu;
-        model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h));
-        model.add_mass_to_hessian(1e8, &mut h);
-        let (ptr, rows) = model.pattern.node_graph();
-        let mut lu = BlockLu::new(ptr, rows).unwrap();
-        lu.factorize(&h, false).unwrap();
-        let b: Vec<f64> = (0..dofs).map(|i| (i as f64 * 0.37).sin()).collect();
-        let mut x = b.clone();
-        for _ in 0..3 {
-            let reps = 5000;
-            let t = Instant::now();
-            for _ in 0..reps {
-                x.copy_from_slice(&b);
-                lu.solve_in_place(&mut x);
-                std::hint::black_box(&x);
-            }
-            let ts = t.elapsed().as_secs_f64() / reps as f64;
-            let t = Instant::now();
-            for _ in 0..reps / 5 {
-                lu.factorize(&h, false).unwrap();
-            }
-            let tf = t.elapsed().as_secs_f64() / (reps / 5) as f64;
-            println!(
-                "block LU: solve {:.1} us, factorize {:.1} us",
-                ts * 1e6,
-                tf * 1e6
-            );
-        }
+    // The block LU of the Hessian with the mass term of a 1e-4 s step.
+    model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h));
+    model.add_mass_to_hessian(1e8, &mut h);
+    let (ptr, rows) = model.pattern.node_graph();
+    let mut lu = BlockLu::new(ptr, rows).unwrap();
+    lu.factorize(&h, false).unwrap();
+    let b: Vec<f64> = (0..dofs).map(|i| (i as f64 * 0.37).sin()).collect();
+    let mut x = b.clone();
+    for _ in 0..3 {
+        let solve = per_call_us(5000, || {
+            x.copy_from_slice(&b);
+            lu.solve_in_place(black_box(&mut x));
+        });
+        let factorize = per_call_us(1000, || lu.factorize(black_box(&h), false).unwrap());
+        println!("block LU: solve {solve:.1} us, factorize {factorize:.1} us");
+    }
+    // The linear solver's overhead around factorisation and solve (the
+    // residual check): both timed alternately, the median difference.
+    let mut linear = LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx)
+        .unwrap()
+        .with_transpose(model.pattern.transpose_map().to_vec())
+        .with_node_blocks(ptr, rows);
+    for _ in 0..3 {
+        let mut differences: Vec<f64> = (0..1000)
+            .map(|_| {
+                let solver = per_call_us(1, || {
+                    x.copy_from_slice(&b);
+                    linear.solve(&h, false, &mut x).unwrap();
+                });
+                let bare = per_call_us(1, || {
+                    x.copy_from_slice(&b);
+                    lu.factorize(&h, false).unwrap();
+                    lu.solve_in_place(&mut x);
+                });
+                solver - bare
+            })
+            .collect();
+        differences.sort_by(f64::total_cmp);
         println!(
-            "solution checksum {:e}",
-            x.iter().map(|v| v.abs()).sum::<f64>()
+            "LinearSolver::solve's overhead: median {:.1} us",
+            differences[differences.len() / 2]
         );
-        let (node_ptr, node_rows) = model.pattern.node_graph();
-        let mut linear =
-            drape::solver::LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx)
-                .unwrap()
-                .with_transpose(model.pattern.transpose_map().to_vec())
-                .with_node_blocks(node_ptr, node_rows);
-        for _ in 0..3 {
-            let reps = 1000;
-            let t = Instant::now();
-            for _ in 0..reps {
-                x.copy_from_slice(&b);
-                linear.solve(&h, false, &mut x).unwrap();
-            }
-            let tl = t.elapsed().as_secs_f64() / reps as f64;
-            println!(
-                "LinearSolver::solve (factorise, solve, check) {:.1} us",
-                tl * 1e6
-            );
-        }
-        for _ in 0..3 {
-            let reps = 1000;
-            let (mut ta, mut tb) = (0.0, 0.0);
-            let mut diffs = Vec::new();
-            for _ in 0..reps {
-                x.copy_from_slice(&b);
-                let t = Instant::now();
-                linear.solve(&h, false, &mut x).unwrap();
-                let a = t.elapsed().as_secs_f64();
-                x.copy_from_slice(&b);
-                let t = Instant::now();
-                lu.factorize(&h, false).unwrap();
-                lu.solve_in_place(&mut x);
-                let c = t.elapsed().as_secs_f64();
-                ta += a;
-                tb += c;
-                diffs.push(a - c);
-            }
-            diffs.sort_by(f64::total_cmp);
-            println!("median overhead {:.1} us", diffs[reps / 2] * 1e6);
-            println!(
-                "LinearSolver::solve {:.1} us, bare factorize + solve {:.1} us: overhead {:.1} us",
-                ta / reps as f64 * 1e6,
-                tb / reps as f64 * 1e6,
-                (ta - tb) / reps as f64 * 1e6
-            );
-        }
-        let mut h2 = h.clone();
-        for _ in 0..3 {
-            let reps = 1000;
-            let mut tf = 0.0;
-            for _ in 0..reps {
-                model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h2));
-                let t = Instant::now();
-                lu.factorize(&h, false).unwrap();
-                tf += t.elapsed().as_secs_f64();
-            }
-            println!(
-                "factorize after an assembly {:.1} us",
-                tf / reps as f64 * 1e6
-            );
-        }
     }
-    let s: f64 = h.iter().map(|v| v.abs()).sum();
+    // A factorisation right after an assembly, as in a Newton iteration.
+    let mut h2 = h.clone();
+    for _ in 0..3 {
+        let mut total = 0.0;
+        for _ in 0..1000 {
+            model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h2));
+            total += per_call_us(1, || lu.factorize(&h, false).unwrap());
+        }
+        println!("factorize after an assembly {:.1} us", total / 1000.0);
+    }
     println!(
-        "checksum {s:e} {:e}",
-        fi.iter().map(|v| v.abs()).sum::<f64>()
+        "checksums {:e} {:e} {:e}",
+        h.iter().map(|v| v.abs()).sum::<f64>(),
+        fi.iter().map(|v| v.abs()).sum::<f64>(),
+        x.iter().map(|v| v.abs()).sum::<f64>()
     );
+}
+
+/// Mean wall time of `f` over `reps` calls (µs).
+fn per_call_us(reps: usize, mut f: impl FnMut()) -> f64 {
+    let t = Instant::now();
+    for _ in 0..reps {
+        f();
+    }
+    t.elapsed().as_secs_f64() / reps as f64 * 1e6
 }
