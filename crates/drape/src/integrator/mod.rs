@@ -72,7 +72,8 @@ pub(crate) struct StepSystem<'a> {
     /// Contact state of the step (hints, active set); the active set
     /// changes during Newton only through [`NewtonSystem::revise`].
     pub contact: Option<&'a mut ContactState>,
-    /// Mesh size `|X|` (m), for the active set's penetration tolerance.
+    /// The reference length `|X|` of Newton's test (m), which scales the
+    /// active set's penetration tolerance (`-1e-12 |X|`).
     pub length: f64,
     /// Revisions of the active set left in this Newton solve.
     pub revisions: usize,
