@@ -27,8 +27,8 @@
 //!
 //! # Active set
 //!
-//! A pair enters when its gap is negative, `g < -1e-12 L` (`L` the mesh
-//! size), on the face its proximity reports (the face it came in by); it
+//! A pair enters when its gap is negative, `g < -1e-12 L` (`L` the
+//! reference length `|X|` of Newton's test), on the face its proximity reports (the face it came in by); it
 //! is then held on that face's surface ([`super::Obstacle::constraint`]:
 //! the plane of a box face, so the constraint stays smooth up to the
 //! edges). It leaves when its multiplier is negative, `lambda < -1e-9
