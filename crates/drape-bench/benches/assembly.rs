@@ -66,14 +66,13 @@ fn benches(c: &mut Criterion) {
     group.sample_size(20);
     for n in [20usize, 100, 300] {
         let (model, y) = fabric(n);
-        let dofs = model.dofs();
-        let (mut fi, mut fe) = (vec![0.0; dofs], vec![0.0; dofs]);
+        let mut fi = vec![0.0; model.dofs()];
         let mut h = vec![0.0; model.pattern.nnz()];
         group.bench_with_input(BenchmarkId::new("force+hessian", n), &n, |b, _| {
-            b.iter(|| black_box(model.assemble(&y, 0.0, &mut fi, &mut fe, Some(&mut h))))
+            b.iter(|| black_box(model.assemble(&y, &mut fi, Some(&mut h))))
         });
         group.bench_with_input(BenchmarkId::new("force", n), &n, |b, _| {
-            b.iter(|| black_box(model.assemble(&y, 0.0, &mut fi, &mut fe, None)))
+            b.iter(|| black_box(model.assemble(&y, &mut fi, None)))
         });
     }
     group.finish();
@@ -82,7 +81,7 @@ fn benches(c: &mut Criterion) {
     for n in [20usize, 100, 300] {
         let (model, y) = fabric(n);
         let dofs = model.dofs();
-        let (mut fi, mut fe) = (vec![0.0; dofs], vec![0.0; dofs]);
+        let (mut fi, fe) = (vec![0.0; dofs], vec![0.0; dofs]);
         let mut h = vec![0.0; model.pattern.nnz()];
         let mut linear = LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx).unwrap();
         let c_mass = 1.0 / (1.0 * 1e-3 * 1e-3);
@@ -91,7 +90,7 @@ fn benches(c: &mut Criterion) {
             &n,
             |b, _| {
                 b.iter(|| {
-                    model.assemble(&y, 0.0, &mut fi, &mut fe, Some(&mut h));
+                    model.assemble(&y, &mut fi, Some(&mut h));
                     model.add_mass_to_hessian(c_mass, &mut h);
                     let mut g: Vec<f64> = fi.iter().zip(&fe).map(|(a, b)| b - a).collect();
                     model.apply_supports(&mut g, Some(&mut h));

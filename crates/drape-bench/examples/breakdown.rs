@@ -54,7 +54,7 @@ fn main() {
         .flat_map(|x| [x[0] * 1.01, x[1] * 1.01, -0.05 * (x[1] - 0.1).powi(2)])
         .collect();
     let dofs = model.dofs();
-    let (mut fi, mut fe) = (vec![0.0; dofs], vec![0.0; dofs]);
+    let (mut fi, fe) = (vec![0.0; dofs], vec![0.0; dofs]);
     let mut h = vec![0.0; model.pattern.nnz()];
     let t = Instant::now();
     let mut linear = LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx).unwrap();
@@ -62,13 +62,13 @@ fn main() {
         "  solver set-up            {:.4} s",
         t.elapsed().as_secs_f64()
     );
-    model.assemble(&y, 0.0, &mut fi, &mut fe, Some(&mut h));
+    model.assemble(&y, &mut fi, Some(&mut h));
     model.add_mass_to_hessian(1e6, &mut h);
     bare(&model.pattern.col_ptr, &model.pattern.row_idx, &h);
     block_lu(&model, &h);
     for round in 0..3 {
         let t = Instant::now();
-        model.assemble(&y, 0.0, &mut fi, &mut fe, Some(&mut h));
+        model.assemble(&y, &mut fi, Some(&mut h));
         let ta = t.elapsed().as_secs_f64();
         let t = Instant::now();
         model.add_mass_to_hessian(1e6, &mut h);

@@ -43,16 +43,16 @@ fn main() {
     let y = &state.positions;
     let dofs = model.dofs();
     let elements = model.mesh.element_count() as f64;
-    let (mut fi, mut fe) = (vec![0.0; dofs], vec![0.0; dofs]);
+    let mut fi = vec![0.0; dofs];
     let mut h = vec![0.0; model.pattern.nnz()];
     let mut out = vec![0.0; dofs];
     println!("states: {:?}", model.state_fractions(y));
     for _ in 0..3 {
         let with = per_call_us(3000, || {
-            black_box(model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h)));
+            black_box(model.assemble(y, &mut fi, Some(&mut h)));
         });
         let without = per_call_us(3000, || {
-            black_box(model.assemble(y, 0.0, &mut fi, &mut fe, None));
+            black_box(model.assemble(y, &mut fi, None));
         });
         println!(
             "force+hessian {with:.1} us ({:.0} ns/element), force {without:.1} us ({:.0} ns/element)",
@@ -80,7 +80,7 @@ fn main() {
         println!("mass times {product:.2} us, add mass to Hessian {term:.2} us");
     }
     // The block LU of the Hessian with the mass term of a 1e-4 s step.
-    model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h));
+    model.assemble(y, &mut fi, Some(&mut h));
     model.add_mass_to_hessian(1e8, &mut h);
     let (ptr, rows) = model.pattern.node_graph();
     let mut lu = BlockLu::new(ptr, rows).unwrap();
@@ -127,7 +127,7 @@ fn main() {
     for _ in 0..3 {
         let mut total = 0.0;
         for _ in 0..1000 {
-            model.assemble(y, 0.0, &mut fi, &mut fe, Some(&mut h2));
+            model.assemble(y, &mut fi, Some(&mut h2));
             total += per_call_us(1, || lu.factorize(&h, false).unwrap());
         }
         println!("factorize after an assembly {:.1} us", total / 1000.0);

@@ -162,13 +162,15 @@ fn assembled_hessian_matches_finite_differences_of_the_residual() {
             .collect();
         let residual = |y: &[f64]| {
             let (mut fi, mut fe) = (vec![0.0; n], vec![0.0; n]);
-            m.assemble(y, 40.0, &mut fi, &mut fe, None);
+            m.assemble(y, &mut fi, None);
+            m.add_pressure(y, 40.0, &mut fe, None);
             fi.iter().zip(&fe).map(|(a, b)| a - b).collect::<Vec<f64>>()
         };
         let dense = |y: &[f64]| {
             let (mut fi, mut fe) = (vec![0.0; n], vec![0.0; n]);
             let mut h = vec![0.0; m.pattern.nnz()];
-            m.assemble(y, 40.0, &mut fi, &mut fe, Some(&mut h));
+            m.assemble(y, &mut fi, Some(&mut h));
+            m.add_pressure(y, 40.0, &mut fe, Some(&mut h));
             let mut d = vec![0.0; n * n];
             for c in 0..n {
                 for k in m.pattern.col_ptr[c]..m.pattern.col_ptr[c + 1] {

@@ -167,8 +167,8 @@ fn rigid_motion_gives_zero_strain_and_force() {
                 [v[0] + 0.7, v[1] - 1.1, v[2] + 2.5]
             })
             .collect();
-        let (mut fi, mut fe) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
-        let u = m.assemble(&y, 0.0, &mut fi, &mut fe, None);
+        let mut fi = vec![0.0; 3 * n];
+        let u = m.assemble(&y, &mut fi, None);
         let fmax = fi.iter().fold(0.0f64, |acc, v| acc.max(v.abs()));
         // Scale: E t L ~ 2e6 * 6e-4 * 0.3 = 360 N; round-off ~1e-16 of it times the nodes.
         assert!(u.abs() < 1e-16, "{order:?}: strain energy {u:e} J");
@@ -238,8 +238,8 @@ fn uniaxial_and_equibiaxial_stretch_match_the_closed_form() {
             }
             // End force: sum of internal forces on the nodes at x = L.
             let nn = m.mesh.node_count();
-            let (mut fi, mut fe) = (vec![0.0; 3 * nn], vec![0.0; 3 * nn]);
-            m.assemble(&y, 0.0, &mut fi, &mut fe, None);
+            let mut fi = vec![0.0; 3 * nn];
+            m.assemble(&y, &mut fi, None);
             let end: f64 = (0..nn)
                 .filter(|&i| m.mesh.nodes[i][0] > l - 1e-12)
                 .map(|i| fi[3 * i])

@@ -3,7 +3,9 @@
 //! contact active-set loop for Lagrange multipliers (SPEC §1.8).
 
 pub mod newmark;
+pub mod potential;
 pub mod statics;
+pub mod terms;
 
 pub use newmark::Newmark;
 pub use statics::StaticStepper;
@@ -14,6 +16,8 @@ use crate::model::Model;
 use crate::solver::newton::{
     self, Evaluation, NewtonError, NewtonReport, NewtonSettings, NewtonSystem, NewtonWorkspace,
 };
+use potential::{IncrementalPotential, StepContext, StepTerm};
+use terms::{InertiaTerm, LoadTerm, MembraneTerm, PenaltyTerm};
 
 /// The state carried from step to step.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,19 +58,13 @@ impl State {
     }
 }
 
-/// The residual `G = F_int - F_ext + c M Y - M Q + F_contact` and Hessian
-/// `H = K - dF_p/dY + c M + H_contact` of one step (static: `c = 0`, no
-/// `M Q`), supports and (Lagrange) contact constraints imposed.
+/// The residual and Hessian of one step: the sum of the terms of its
+/// incremental potential ([`potential`]), then the supports and (Lagrange)
+/// contact constraints imposed.
 pub(crate) struct StepSystem<'a> {
     pub model: &'a Model,
-    /// `1 / (beta dt^2)`, or 0 in statics.
-    pub c: f64,
-    /// `M Q_s` (dynamic) or empty (static).
-    pub mq: &'a [f64],
-    /// Dead external forces of this step.
-    pub dead: &'a [f64],
-    /// Follower pressure of this step (Pa).
-    pub pressure: f64,
+    /// The terms of the step.
+    pub potential: IncrementalPotential<'a>,
     /// Time at the end of the step (obstacle positions).
     pub time: f64,
     /// Contact state of the step (hints, active set); the active set
@@ -77,65 +75,22 @@ pub(crate) struct StepSystem<'a> {
     pub length: f64,
     /// Revisions of the active set left in this Newton solve.
     pub revisions: usize,
-    /// Last evaluation's internal and external forces, and `M Y`.
-    pub f_int: &'a mut [f64],
-    pub f_ext: &'a mut [f64],
-    pub my: &'a mut [f64],
     /// Strain energy at the last evaluation (J).
     pub strain_energy: f64,
     /// Lagrange: the active nodes at the last evaluation.
     pub active: Vec<ActiveNode>,
 }
 
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
 impl NewtonSystem for StepSystem<'_> {
     fn evaluate(&mut self, y: &[f64], g: &mut [f64], h: Option<&mut [f64]>) -> Evaluation {
         let model = self.model;
-        self.f_ext.copy_from_slice(self.dead);
         let mut h = h;
-        self.strain_energy =
-            model.assemble(y, self.pressure, self.f_int, self.f_ext, h.as_deref_mut());
-        let mut scale;
-        if self.c != 0.0 {
-            model.mass_times(y, self.my);
-            // G and the norms of its four terms in one pass (each sum of
-            // squares in index order, as `norm` takes it).
-            let mut squares = [0.0; 4];
-            for i in 0..g.len() {
-                let (fi, fe, my, mq) = (self.f_int[i], self.f_ext[i], self.my[i], self.mq[i]);
-                g[i] = fi - fe + self.c * my - mq;
-                squares[0] += fi * fi;
-                squares[1] += fe * fe;
-                squares[2] += my * my;
-                squares[3] += mq * mq;
-            }
-            let [a, b, m, q] = squares.map(f64::sqrt);
-            scale = a + b;
-            scale += self.c * m + q;
-            if let Some(h) = h.as_deref_mut() {
-                model.add_mass_to_hessian(self.c, h);
-            }
-        } else {
-            scale = norm(self.f_int) + norm(self.f_ext);
-            for i in 0..g.len() {
-                g[i] = self.f_int[i] - self.f_ext[i];
-            }
-        }
-        if let (Some(contact), Some(state)) = (&model.contact, self.contact.as_deref())
-            && let ContactMethod::Penalty { stiffness } = contact.method
-        {
-            contact.add_penalty(
-                stiffness,
-                y,
-                self.time,
-                state,
-                g,
-                h.as_deref_mut().map(|h| (h, &model.pattern)),
-            );
-        }
+        let ctx = StepContext {
+            time: self.time,
+            contact: self.contact.as_deref(),
+        };
+        let value = self.potential.evaluate(&ctx, y, g, h.as_deref_mut());
+        self.strain_energy = self.potential.value("membrane").map_or(0.0, |v| v.value);
         model.apply_supports(g, h.as_deref_mut());
         let mut merit = None;
         if let (Some(contact), Some(state)) = (&model.contact, self.contact.as_deref())
@@ -156,8 +111,11 @@ impl NewtonSystem for StepSystem<'_> {
         let symmetric = model.symmetric_by_construction()
             || h.is_some_and(|h| model.pattern.is_symmetric(h, 1e-10));
         Evaluation {
-            scale,
+            scale: value.scale,
             symmetric,
+            // With multipliers the constrained problem is not the
+            // potential's unconstrained minimum: judged by its residual.
+            energy: value.energy.filter(|_| merit.is_none()),
             merit,
         }
     }
@@ -189,20 +147,54 @@ impl NewtonSystem for StepSystem<'_> {
     }
 }
 
-/// The terms of a step's residual other than the elements'.
+/// What a step adds to the membrane: its time, inertia and loads.
 pub(crate) struct StepTerms<'a> {
+    /// `1 / (beta dt^2)`, or 0 in statics (no inertia).
     pub c: f64,
+    /// `M Q_s` (dynamic) or empty (static).
     pub mq: &'a [f64],
+    /// Dead external forces of this step.
     pub dead: &'a [f64],
+    /// Follower pressure of this step (Pa).
     pub pressure: f64,
+    /// Time at the end of the step (obstacle positions).
     pub time: f64,
+}
+
+/// The terms of a step's incremental potential, in their order: membrane,
+/// loads, inertia (dynamic), penalty contact (with obstacles and
+/// penalties). `f_ext` receives the external forces, `my` is scratch.
+fn step_potential<'a>(
+    model: &'a Model,
+    terms: &StepTerms<'a>,
+    f_ext: &'a mut [f64],
+    my: &'a mut [f64],
+) -> IncrementalPotential<'a> {
+    let mut list: Vec<Box<dyn StepTerm + 'a>> = vec![
+        Box::new(MembraneTerm::new(model)),
+        Box::new(LoadTerm::new(model, terms.dead, terms.pressure, f_ext)),
+    ];
+    if terms.c != 0.0 {
+        list.push(Box::new(InertiaTerm::new(model, terms.c, terms.mq, my)));
+    }
+    if let Some(contact) = &model.contact
+        && let ContactMethod::Penalty { stiffness } = contact.method
+    {
+        list.push(Box::new(PenaltyTerm::new(
+            contact,
+            &model.pattern,
+            stiffness,
+        )));
+    }
+    IncrementalPotential::new(list)
 }
 
 /// Solves one step from the first guess `y`: Newton, and for Lagrange
 /// contact the active-set loop around it. On success `contact` holds the
 /// converged active set, multipliers and refreshed features; on error it is
 /// unchanged. Returns Newton's report (iterations summed over re-solutions)
-/// and the strain energy.
+/// and the strain energy; `f_ext` holds the external forces at the
+/// solution.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_step(
     model: &Model,
@@ -212,7 +204,6 @@ pub(crate) fn solve_step(
     length: f64,
     settings: &NewtonSettings,
     ws: &mut NewtonWorkspace,
-    f_int: &mut [f64],
     f_ext: &mut [f64],
     my: &mut [f64],
 ) -> Result<(NewtonReport, f64), NewtonError> {
@@ -223,33 +214,35 @@ pub(crate) fn solve_step(
     // at once. The loop below settles the set as before (it releases
     // nodes whose multiplier pulls), but a node that the predictor already
     // puts inside an obstacle no longer costs a re-solution of the step to
-    // be admitted: the pedestal with multipliers needs 1,067 Newton
-    // iterations instead of 1,165, 89 re-solutions instead of 129.
+    // be admitted (docs/performance.md).
     if let (Some(cm), Some(state)) = (&model.contact, contact.as_mut())
         && cm.method == ContactMethod::Lagrange
     {
         cm.admit_penetrating(y, terms.time, state, &model.fixed, length);
     }
     loop {
+        let mut potential = step_potential(model, &terms, &mut *f_ext, &mut *my);
+        if rounds == 0 {
+            let ctx = StepContext {
+                time: terms.time,
+                contact: contact.as_ref(),
+            };
+            potential.begin_step(&ctx, y);
+        }
         let mut system = StepSystem {
             model,
-            c: terms.c,
-            mq: terms.mq,
-            dead: terms.dead,
-            pressure: terms.pressure,
+            potential,
             time: terms.time,
             contact: contact.as_mut(),
             length,
             revisions: REVISIONS_IN_NEWTON,
-            f_int: &mut *f_int,
-            f_ext: &mut *f_ext,
-            my: &mut *my,
             strain_energy: 0.0,
             active: Vec::new(),
         };
         let result = newton::solve(&mut system, y, length, settings, ws);
         let strain = system.strain_energy;
         let active = std::mem::take(&mut system.active);
+        drop(system);
         let report = match result {
             Ok(r) => r,
             Err(e) => {

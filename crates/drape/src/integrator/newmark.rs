@@ -117,13 +117,8 @@ impl Newmark {
         let n = x.len();
         model.dead_forces(0.0, None, &mut ws.dead);
         ws.f_ext.copy_from_slice(&ws.dead);
-        model.assemble(
-            &x,
-            model.pressure_at(0.0, None),
-            &mut ws.f_int,
-            &mut ws.f_ext,
-            None,
-        );
+        model.assemble(&x, &mut ws.f_int, None);
+        model.add_pressure(&x, model.pressure_at(0.0, None), &mut ws.f_ext, None);
         let mut rhs: Vec<f64> = (0..n).map(|i| ws.f_ext[i] - ws.f_int[i]).collect();
         let (m, linear) = ws.newton.matrix_and_solver();
         m.fill(0.0);
@@ -179,7 +174,6 @@ impl Newmark {
             length,
             settings,
             &mut ws.newton,
-            &mut ws.f_int,
             &mut ws.f_ext,
             &mut ws.my,
         );

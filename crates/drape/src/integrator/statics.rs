@@ -57,7 +57,6 @@ impl StaticStepper {
             length,
             settings,
             &mut ws.newton,
-            &mut ws.f_int,
             &mut ws.f_ext,
             &mut my,
         );

@@ -52,6 +52,13 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     fn has_symmetric_tangent(&self) -> bool {
         true
     }
+    /// Whether [`Material::stress`] is the derivative of
+    /// [`Material::energy`] (a hyperelastic material: the strain energy is
+    /// then a potential of the internal forces, and Newton may judge its
+    /// steps by the energy). Default: yes.
+    fn is_hyperelastic(&self) -> bool {
+        true
+    }
     /// The wrinkling state at a strain, for models that have one; `None`
     /// for models that carry compression (the output then classifies the
     /// stress itself).

@@ -314,6 +314,12 @@ impl Material for Wrinkling {
         self.model == WrinklingModel::RelaxedEnergy
     }
 
+    /// The relaxed energy is a potential; the projected stress is not the
+    /// derivative of any energy (the module docs).
+    fn is_hyperelastic(&self) -> bool {
+        self.model == WrinklingModel::RelaxedEnergy
+    }
+
     fn wrinkle_state(&self, e: [f64; 3]) -> Option<WrinkleState> {
         Some(self.state_of(e))
     }

@@ -1,4 +1,5 @@
-//! Parallel assembly of the internal and pressure forces and the Hessian.
+//! Parallel assembly of the internal forces and the Hessian, and of the
+//! follower pressure's forces and tangent.
 //!
 //! Elements are processed colour by colour (no two elements of a colour
 //! share a node), each colour in parallel with rayon; below
@@ -160,18 +161,10 @@ impl Model {
         ye
     }
 
-    /// Strain energy (returned), internal forces `f_int` (overwritten),
-    /// pressure forces added to `f_ext` for the pressure `pressure` (Pa),
-    /// and, if given, the Hessian values `h` (overwritten) `K - d f_p / d Y`
-    /// on [`Model::pattern`]. `y`: current positions, flattened.
-    pub fn assemble(
-        &self,
-        y: &[f64],
-        pressure: f64,
-        f_int: &mut [f64],
-        f_ext: &mut [f64],
-        h: Option<&mut [f64]>,
-    ) -> f64 {
+    /// Strain energy (returned), internal forces `f_int` (overwritten)
+    /// and, if given, the Hessian values `h` (overwritten) `K` on
+    /// [`Model::pattern`]. `y`: current positions, flattened.
+    pub fn assemble(&self, y: &[f64], f_int: &mut [f64], h: Option<&mut [f64]>) -> f64 {
         let n = self.mesh.order.nodes_per_element();
         let m = 3 * n;
         f_int.fill(0.0);
@@ -191,7 +184,6 @@ impl Model {
             None => Shared(std::ptr::null_mut()),
         };
         let fi = Shared(f_int.as_mut_ptr());
-        let fe = Shared(f_ext.as_mut_ptr());
         let material = self.material.as_ref();
         // Elements are summed in fixed groups and chunks, their partial
         // energies in order: the result depends neither on how rayon
@@ -215,22 +207,6 @@ impl Model {
                     &mut local.f[..m],
                     k,
                 );
-                if pressure != 0.0 {
-                    local.fp[..m].fill(0.0);
-                    if want_h && zero {
-                        // (Left unwritten by the kernel.)
-                        local.k[..m * m].fill(0.0);
-                    }
-                    let k = want_h.then_some(&mut local.k[..m * m]);
-                    add_pressure_force(
-                        pressure,
-                        &local.y[..n],
-                        &self.pressure_quadrature,
-                        &mut local.fp[..m],
-                        k,
-                        -1.0,
-                    );
-                }
                 // SAFETY: elements that run at once (of one colour, or of
                 // the two halves of a small mesh) share no node, so the
                 // entries written below are disjoint across threads.
@@ -238,20 +214,15 @@ impl Model {
                     for (a, &node) in el.iter().enumerate() {
                         for i in 0..3 {
                             fi.add(3 * node + i, local.f[3 * a + i]);
-                            if pressure != 0.0 {
-                                fe.add(3 * node + i, local.fp[3 * a + i]);
-                            }
                         }
                     }
                     if want_h {
                         let bases = &self.element_blocks[e * n * n..(e + 1) * n * n];
                         let first = &self.element_block_first[e * n * n..(e + 1) * n * n];
                         let k = &local.k[..m * m];
-                        // A zero element Hessian (with pressure, the
-                        // pressure's tangent is in `k`) only writes zeros
-                        // into the blocks it is first in (`k` is then not
-                        // read: the kernel left it unwritten).
-                        let zero = zero && pressure == 0.0;
+                        // A zero element Hessian only writes zeros into
+                        // the blocks it is first in (`k` is then not read:
+                        // the kernel left it unwritten).
                         match n {
                             3 => scatter::<3>(self, h_ptr, el, k, bases, first, zero),
                             6 => scatter::<6>(self, h_ptr, el, k, bases, first, zero),
@@ -263,12 +234,21 @@ impl Model {
             }
             sum
         };
+        self.traverse(work)
+    }
+
+    /// Runs `work` over every element in the assembly's order and returns
+    /// the sum of its results (in a fixed order: the result depends
+    /// neither on the threads nor on rayon's scheduling). Elements that
+    /// run at once share no node, so `work` may write the entries of its
+    /// elements' nodes without locks. Below [`super::PARALLEL_ABOVE`]
+    /// elements: the two halves of the mesh, the second on the helper
+    /// thread (`crate::par`: rayon's wake-ups cost more than such a loop),
+    /// then the elements at their interface, each colour in two halves;
+    /// each thread's scratch is kept between assemblies (7 kB to zero
+    /// otherwise). Above: colour by colour, each in parallel chunks.
+    fn traverse(&self, work: impl Fn(&mut Local, &[usize]) -> f64 + Sync) -> f64 {
         if let Some(halves) = &self.halves {
-            // Two halves of the mesh that share no node, the second on
-            // the helper thread (`crate::par`: rayon's wake-ups cost more
-            // than such a loop), then the elements at their interface,
-            // each colour in two halves. Each thread's scratch is kept
-            // between assemblies (7 kB to zero otherwise).
             thread_local! {
                 static LOCAL: std::cell::RefCell<Local> = std::cell::RefCell::new(Local::new());
             }
@@ -286,12 +266,72 @@ impl Model {
         for colour in &self.colours {
             energy += colour
                 .par_chunks(CHUNK)
-                .map_init(Local::new, work)
+                .map_init(Local::new, &work)
                 .collect::<Vec<f64>>()
                 .iter()
                 .sum::<f64>();
         }
         energy
+    }
+
+    /// Adds the follower pressure forces for the pressure `pressure` (Pa)
+    /// to `f_ext` and, if given, their derivative `-d f_p / d Y` to the
+    /// Hessian values `h` on [`Model::pattern`] (SPEC §1.5; the kernel is
+    /// [`add_pressure_force`]). The forces are added element by element in
+    /// the order of [`Model::assemble`], so `f_ext` gets the same sums.
+    pub fn add_pressure(&self, y: &[f64], pressure: f64, f_ext: &mut [f64], h: Option<&mut [f64]>) {
+        if pressure == 0.0 {
+            return;
+        }
+        let n = self.mesh.order.nodes_per_element();
+        let m = 3 * n;
+        let want_h = h.is_some();
+        let h_ptr = Shared(h.map_or(std::ptr::null_mut(), |h| h.as_mut_ptr()));
+        let fe = Shared(f_ext.as_mut_ptr());
+        // Every block is added to (none is written first).
+        const ADD: [bool; MAX_NODES * MAX_NODES] = [false; MAX_NODES * MAX_NODES];
+        let work = |local: &mut Local, chunk: &[usize]| -> f64 {
+            for &e in chunk {
+                let el = self.mesh.element(e);
+                for (a, &node) in el.iter().enumerate() {
+                    local.y[a] = [y[3 * node], y[3 * node + 1], y[3 * node + 2]];
+                }
+                local.fp[..m].fill(0.0);
+                if want_h {
+                    local.k[..m * m].fill(0.0);
+                }
+                let k = want_h.then_some(&mut local.k[..m * m]);
+                add_pressure_force(
+                    pressure,
+                    &local.y[..n],
+                    &self.pressure_quadrature,
+                    &mut local.fp[..m],
+                    k,
+                    -1.0,
+                );
+                // SAFETY: elements that run at once share no node (see
+                // `traverse`), so the entries written are disjoint.
+                unsafe {
+                    for (a, &node) in el.iter().enumerate() {
+                        for i in 0..3 {
+                            fe.add(3 * node + i, local.fp[3 * a + i]);
+                        }
+                    }
+                }
+                if want_h {
+                    let bases = &self.element_blocks[e * n * n..(e + 1) * n * n];
+                    let k = &local.k[..m * m];
+                    let first = &ADD[..n * n];
+                    match n {
+                        3 => scatter::<3>(self, h_ptr, el, k, bases, first, false),
+                        6 => scatter::<6>(self, h_ptr, el, k, bases, first, false),
+                        _ => scatter::<10>(self, h_ptr, el, k, bases, first, false),
+                    }
+                }
+            }
+            0.0
+        };
+        self.traverse(work);
     }
 
     /// Strain energy only (J), summed deterministically.

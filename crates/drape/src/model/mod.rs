@@ -521,11 +521,11 @@ mod tests {
                 .flat_map(|x| [1.02 * x[0], 0.97 * x[1], 0.02 * (9.0 * x[0]).cos() * x[1]])
                 .collect();
             let n = model.dofs();
-            let (mut f, mut fe) = (vec![0.0; n], vec![0.0; n]);
+            let mut f = vec![0.0; n];
             let mut zeros = vec![0.0; model.pattern.nnz()];
             let mut nans = vec![f64::NAN; model.pattern.nnz()];
-            model.assemble(&y, 0.0, &mut f, &mut fe, Some(&mut zeros));
-            model.assemble(&y, 0.0, &mut f, &mut fe, Some(&mut nans));
+            model.assemble(&y, &mut f, Some(&mut zeros));
+            model.assemble(&y, &mut f, Some(&mut nans));
             assert!(
                 zeros
                     .iter()
@@ -618,9 +618,8 @@ mod tests {
                 .expect("a thread pool");
             pool.install(|| {
                 let n = model.dofs();
-                let (mut f, mut fe, mut h) =
-                    (vec![0.0; n], vec![0.0; n], vec![0.0; model.pattern.nnz()]);
-                let u = model.assemble(&y, 0.0, &mut f, &mut fe, Some(&mut h));
+                let (mut f, mut h) = (vec![0.0; n], vec![0.0; model.pattern.nnz()]);
+                let u = model.assemble(&y, &mut f, Some(&mut h));
                 (u, f, h)
             })
         };

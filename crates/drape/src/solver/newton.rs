@@ -15,9 +15,16 @@
 //! scale`, e.g. free fall from the Newmark predictor) is accepted with no
 //! iteration. Each Newton increment is applied in full when it reduces
 //! `|G|`, as it always does near a solution (so quadratic convergence is
-//! kept); otherwise it is halved, at most four times (a backtracking line
-//! search: contact makes `G` only piecewise smooth, and a full step can
-//! overshoot a node's entry into or exit from contact).
+//! kept). A system with an energy ([`Evaluation::energy`]: every term of
+//! the step's incremental potential a potential) accepts it when it lowers
+//! the energy by Armijo's condition `E(Y + a dY) <= E(Y) + 1e-4 a G.dY`,
+//! or reduces `|G|` without raising the energy beyond its round-off (a
+//! residual can fall while the energy rises: far from a minimum, `|G|` is
+//! no merit function). Otherwise the increment is halved, at most four
+//! times without an energy and ten with one (a backtracking line search:
+//! contact makes `G` only piecewise smooth, and a full step can overshoot
+//! a node's entry into or exit from contact; Nocedal & Wright 2006,
+//! §3.1).
 //!
 //! When a full step's increment is above the tolerance (so the iteration
 //! cannot end there) and no chord step will follow, the trial point's
@@ -136,6 +143,10 @@ pub struct Evaluation {
     /// not `|G|` (constrained systems whose `G` carries right-hand-side
     /// corrections).
     pub merit: Option<f64>,
+    /// The energy whose gradient `G` is, when the system has one (every
+    /// term of the incremental potential a potential, no multipliers):
+    /// the line search then accepts a step that lowers it enough (Armijo).
+    pub energy: Option<f64>,
 }
 
 /// A nonlinear system `G(Y) = 0` with Hessian `H = dG/dY` on a fixed pattern.
@@ -281,6 +292,22 @@ pub fn solve(
         // expecting chord steps only after a fourfold shrink, the
         // hanging cloth, the drape tester and the multipliers alike).
         let mut hessian_at_trial = full_increment > settings.tolerance && !chord_ahead;
+        // With an energy, Armijo's condition on it (the incremental
+        // potential's decrease along the Newton direction, whose slope is
+        // G . dY) accepts a step as well as a smaller residual does, and
+        // the backtracking may go further (the energy is a merit function
+        // that the residual of a non-convex potential is not).
+        let energy0 = eval.energy;
+        let slope = if energy0.is_some() {
+            ws.g.iter().zip(&ws.dy).map(|(g, d)| g * d).sum::<f64>()
+        } else {
+            0.0
+        };
+        let shortest = if energy0.is_some() {
+            1.0 / 1024.0
+        } else {
+            1.0 / 16.0
+        };
         let mut alpha = 1.0;
         loop {
             for ((yi, y0), d) in y.iter_mut().zip(&ws.y_old).zip(&ws.dy) {
@@ -292,9 +319,19 @@ pub fn solve(
                 system.evaluate(y, &mut ws.g, None)
             };
             let trial = eval.merit.unwrap_or_else(|| norm(&ws.g));
-            if (trial.is_finite() && trial <= (1.0 - 1e-4 * alpha) * residual)
-                || alpha <= 1.0 / 16.0
-            {
+            // With an energy, a smaller residual counts only where the
+            // energy did not rise beyond its round-off (near the solution,
+            // where Armijo's decrease drowns in it); Armijo's condition
+            // counts on its own.
+            let (armijo, not_higher) = match (energy0, eval.energy) {
+                (Some(e0), Some(e1)) => (
+                    slope < 0.0 && e1 <= e0 + 1e-4 * alpha * slope,
+                    e1 <= e0 + 1e-12 * e0.abs(),
+                ),
+                _ => (false, true),
+            };
+            let smaller = trial <= (1.0 - 1e-4 * alpha) * residual && not_higher;
+            if (trial.is_finite() && (smaller || armijo)) || alpha <= shortest {
                 residual = trial;
                 break;
             }
@@ -461,6 +498,7 @@ mod tests {
                 scale: self.b.iter().map(|v| v.abs()).sum::<f64>() + 1.0,
                 symmetric: true,
                 merit: None,
+                energy: None,
             }
         }
 
@@ -511,5 +549,65 @@ mod tests {
                 1 + report.iterations + report.chord_steps + revisions
             );
         }
+    }
+
+    /// `E(y) = sum_i sqrt(1 + y_i^2)`: convex, but far from its minimum
+    /// a full Newton step (`dy = -y (1 + y^2)`) lands ever further away.
+    struct Hyperbola {
+        with_energy: bool,
+        energies: Vec<f64>,
+    }
+
+    impl NewtonSystem for Hyperbola {
+        fn evaluate(&mut self, y: &[f64], g: &mut [f64], h: Option<&mut [f64]>) -> Evaluation {
+            for i in 0..3 {
+                g[i] = y[i] / (1.0 + y[i] * y[i]).sqrt();
+            }
+            if let Some(h) = h {
+                h.fill(0.0);
+                for i in 0..3 {
+                    h[4 * i] = (1.0 + y[i] * y[i]).powf(-1.5);
+                }
+            }
+            let energy: f64 = y.iter().map(|v| (1.0 + v * v).sqrt()).sum();
+            self.energies.push(energy);
+            Evaluation {
+                scale: 1.0,
+                symmetric: true,
+                merit: None,
+                energy: self.with_energy.then_some(energy),
+            }
+        }
+    }
+
+    /// Armijo on the energy finds the minimum from where the residual's
+    /// line search (at most four halvings, then the step is taken) is
+    /// thrown ever further out: the energy of the accepted iterates only
+    /// falls, and the last steps contract quadratically.
+    #[test]
+    fn the_energy_line_search_converges_where_full_steps_diverge() {
+        let settings = NewtonSettings {
+            chord_steps: 0,
+            ..NewtonSettings::default()
+        };
+        let start = [20.0, -15.0, 8.0];
+        let mut plain = Hyperbola {
+            with_energy: false,
+            energies: Vec::new(),
+        };
+        let mut y = start;
+        assert!(solve(&mut plain, &mut y, 1.0, &settings, &mut workspace()).is_err());
+        let mut system = Hyperbola {
+            with_energy: true,
+            energies: Vec::new(),
+        };
+        let mut y = start;
+        let report = solve(&mut system, &mut y, 1.0, &settings, &mut workspace()).unwrap();
+        assert!(y.iter().all(|v| v.abs() < 1e-10), "{y:?}");
+        // Quadratic at the end: each residual about the square of the one
+        // before (|G| ~ |y| near 0, where the step is y^3).
+        let r = &report.residuals;
+        let n = r.len();
+        assert!(r[n - 1] <= 10.0 * r[n - 2].powi(2) + 1e-300, "{r:?}");
     }
 }

@@ -1,0 +1,151 @@
+//! The terms of a step's incremental potential ([`super::potential`]),
+//! one concept per file: the membrane's strain energy, inertia, the
+//! external loads, penalty contact. Each states its energy, gradient and
+//! Hessian, and its test checks them against central finite differences
+//! through the one checker, [`check_term`].
+
+mod inertia;
+mod loads;
+mod membrane;
+mod penalty;
+
+pub use inertia::InertiaTerm;
+pub use loads::LoadTerm;
+pub use membrane::MembraneTerm;
+pub use penalty::PenaltyTerm;
+
+#[cfg(test)]
+pub(crate) use check::{check_term, deformed, patch_model};
+
+#[cfg(test)]
+mod check {
+    use super::super::potential::{StepContext, StepTerm};
+    use crate::element::membrane::Section;
+    use crate::fd::{gradient_error, jacobian_error};
+    use crate::load::Load;
+    use crate::material::Material;
+    use crate::mesh::ElementOrder;
+    use crate::mesh::generate::{Pattern, rectangle};
+    use crate::model::{MassKind, Model};
+    use crate::solver::SparsePattern;
+
+    /// A 10 cm square of 3 x 2 squares (12 triangles) of `order` (1–3),
+    /// 0.6 mm thick, 320 kg/m^3, with `loads`.
+    pub(crate) fn patch_model(
+        order: usize,
+        material: Box<dyn Material>,
+        loads: Vec<Load>,
+    ) -> Model {
+        let order = match order {
+            1 => ElementOrder::Linear,
+            2 => ElementOrder::Quadratic,
+            _ => ElementOrder::Cubic,
+        };
+        let mesh = rectangle([0.1, 0.1], [3, 2], Pattern::Alternate, [0.0; 3], order);
+        Model::new(
+            mesh,
+            material,
+            Section {
+                thickness: 6e-4,
+                prestress: 0.0,
+            },
+            320.0,
+            loads,
+            Vec::new(),
+            MassKind::Consistent,
+        )
+        .expect("a valid mesh")
+    }
+
+    /// The patch stretched along x, compressed along y (so wrinkling
+    /// models see taut, wrinkled and slack points), sheared and lifted
+    /// into a wave.
+    pub(crate) fn deformed(model: &Model) -> Vec<f64> {
+        model
+            .initial_positions()
+            .chunks(3)
+            .flat_map(|x| {
+                [
+                    1.03 * x[0] + 0.01 * x[1],
+                    (0.97 + 0.5 * x[0]) * x[1],
+                    0.02 * (20.0 * x[0]).sin() * (1.0 + 10.0 * x[1]),
+                ]
+            })
+            .collect()
+    }
+
+    /// The dense Hessian of `term` at `y` (columns of the sparse pattern
+    /// expanded), row-major.
+    fn dense_hessian(
+        term: &mut dyn StepTerm,
+        ctx: &StepContext,
+        pattern: &SparsePattern,
+        y: &[f64],
+    ) -> Vec<f64> {
+        let n = y.len();
+        let mut g = vec![0.0; n];
+        let mut h = vec![f64::NAN; pattern.nnz()];
+        if term.overwrites() {
+            term.add(ctx, y, &mut g, Some(&mut h), true);
+        } else {
+            h.fill(0.0);
+            term.add(ctx, y, &mut g, Some(&mut h), false);
+        }
+        let mut dense = vec![0.0; n * n];
+        for col in 0..n {
+            for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
+                dense[pattern.row_idx[k] * n + col] = h[k];
+            }
+        }
+        dense
+    }
+
+    /// The gradient (residual contribution) of `term` at `y`.
+    fn gradient(term: &mut dyn StepTerm, ctx: &StepContext, y: &[f64]) -> (Vec<f64>, f64) {
+        let mut g = vec![0.0; y.len()];
+        let fresh = term.overwrites();
+        let v = term.add(ctx, y, &mut g, None, fresh);
+        (g, v.value)
+    }
+
+    /// The generic finite-difference check of a step term at `y`: its
+    /// Hessian against central differences of its gradient, and, for a
+    /// potential, its gradient against central differences of its value.
+    /// Returns the two relative errors (the second 0 for a term that is
+    /// not a potential). `h`: the difference step (m).
+    pub(crate) fn check_term(
+        term: &mut dyn StepTerm,
+        ctx: &StepContext,
+        pattern: &SparsePattern,
+        y: &[f64],
+        h: f64,
+    ) -> (f64, f64) {
+        let term = std::cell::RefCell::new(term);
+        let hess = dense_hessian(&mut **term.borrow_mut(), ctx, pattern, y);
+        let hessian_err = jacobian_error(
+            |x| gradient(&mut **term.borrow_mut(), ctx, x).0,
+            |_| hess.clone(),
+            y,
+            h,
+        );
+        let (_, v0) = {
+            let mut g = vec![0.0; y.len()];
+            let mut t = term.borrow_mut();
+            let fresh = t.overwrites();
+            let v = t.add(ctx, y, &mut g, None, fresh);
+            (g, v)
+        };
+        let gradient_err = if v0.potential {
+            let (g0, _) = gradient(&mut **term.borrow_mut(), ctx, y);
+            gradient_error(
+                |x| gradient(&mut **term.borrow_mut(), ctx, x).1,
+                |_| g0.clone(),
+                y,
+                h,
+            )
+        } else {
+            0.0
+        };
+        (hessian_err, gradient_err)
+    }
+}
