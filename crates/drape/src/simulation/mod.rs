@@ -20,6 +20,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 mod checkpoint;
 mod frames;
+pub mod schedule;
 use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
 use crate::integrator::{State, StaticStepper};
 use crate::output::atomic::write_atomic;
