@@ -1,13 +1,14 @@
 //! Checkpoints: the full state of a run in a versioned binary file, to
 //! resume from (`drape run --resume DIR`).
 //!
-//! Format (little-endian), version 2:
+//! Format (little-endian), version 3:
 //!
 //! ```text
 //! magic "DRAPECKP" · version u32 · scenario hash u64 · dofs u64 · nodes u64 · bodies u64
 //! counters: scheduled steps done, converged steps, Newton iterations, cut-back steps (u64 each),
 //!           first contact time f64 (NaN: none), last strain energy f64,
-//!           steps since the last frame u64, step of the last frame u64, wall seconds f64
+//!           steps since the last frame u64, step of the last frame u64, wall seconds f64,
+//!           segment u64, step size f64, still steps u64
 //! state: time f64, external work f64, acceleration persistence f64,
 //!        positions, velocities, accelerations,
 //!        external forces of the last step (dofs f64 each)
@@ -19,6 +20,9 @@
 //!
 //! Version 1 (drape before the predictor carried the persistence) is read
 //! too, without the persistence: it resumes with 1, the predictor it had.
+//! Versions 1 and 2 (drape before adaptive steps and the rest criterion)
+//! have no segment, step size and still steps: they resume with 0 for each
+//! (a fixed schedule's values; adaptive runs did not exist).
 //!
 //! Every count is checked against the model before anything is allocated,
 //! and the trailing hash rejects a truncated or damaged file.
@@ -26,9 +30,10 @@
 use crate::contact::ContactState;
 use crate::integrator::State;
 use crate::scenario::fnv1a;
+use crate::simulation::schedule::REST_STEPS;
 
 const MAGIC: &[u8; 8] = b"DRAPECKP";
-const VERSION: u32 = 2;
+const VERSION: u32 = 3;
 
 /// The run's counters at a checkpoint.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -51,6 +56,16 @@ pub struct Counters {
     pub last_written: usize,
     /// Wall time spent before this point (s).
     pub wall_seconds: f64,
+    /// Adaptive steps: the schedule's segment the run is in (0 with fixed
+    /// steps).
+    pub segment: usize,
+    /// Adaptive steps: the controller's step size for the next step (s;
+    /// 0 with fixed steps).
+    pub step_size: f64,
+    /// Rest criterion: consecutive converged steps with every node slower
+    /// than the rest speed (0 without a rest criterion), below
+    /// [`REST_STEPS`].
+    pub still_steps: usize,
 }
 
 /// Everything a run needs to continue.
@@ -116,6 +131,9 @@ impl Checkpoint {
         b.extend_from_slice(&(c.since_frame as u64).to_le_bytes());
         b.extend_from_slice(&(c.last_written as u64).to_le_bytes());
         b.extend_from_slice(&c.wall_seconds.to_le_bytes());
+        b.extend_from_slice(&(c.segment as u64).to_le_bytes());
+        b.extend_from_slice(&c.step_size.to_le_bytes());
+        b.extend_from_slice(&(c.still_steps as u64).to_le_bytes());
         b.extend_from_slice(&s.time.to_le_bytes());
         b.extend_from_slice(&s.external_work.to_le_bytes());
         b.extend_from_slice(&s.persistence.to_le_bytes());
@@ -193,7 +211,7 @@ impl Checkpoint {
                 "written for {d} unknowns and {b} obstacles, the scenario has {dofs} and {bodies}"
             )));
         }
-        let counters = Counters {
+        let mut counters = Counters {
             scheduled_done: r.usize()?,
             step: r.usize()?,
             iterations: r.usize()?,
@@ -203,7 +221,25 @@ impl Checkpoint {
             since_frame: r.usize()?,
             last_written: r.usize()?,
             wall_seconds: r.f64()?,
+            ..Counters::default()
         };
+        if version >= 3 {
+            counters.segment = r.usize()?;
+            counters.step_size = r.f64()?;
+            counters.still_steps = r.usize()?;
+        }
+        if !(counters.step_size.is_finite() && counters.step_size >= 0.0) {
+            return Err(bad(&format!(
+                "step size {} is not a finite size >= 0",
+                counters.step_size
+            )));
+        }
+        if counters.still_steps >= REST_STEPS {
+            return Err(bad(&format!(
+                "still steps {} not below {REST_STEPS} (the run would have ended at rest)",
+                counters.still_steps
+            )));
+        }
         let time = r.f64()?;
         let external_work = r.f64()?;
         let persistence = if version >= 2 { r.f64()? } else { 1.0 };
@@ -329,6 +365,9 @@ mod tests {
                 since_frame: 2,
                 last_written: 7,
                 wall_seconds: 0.5,
+                segment: 1,
+                step_size: 2.5e-3,
+                still_steps: 4,
             },
             state: State {
                 time: 0.3,
@@ -372,44 +411,77 @@ mod tests {
         }
     }
 
-    /// The same file as version 1 wrote it: without the persistence.
-    fn as_version_1(bytes: &[u8]) -> Vec<u8> {
-        // magic, version, 4 header u64, 4 counters u64, 5 counter fields,
-        // time, external work: the persistence follows.
-        let at = 8 + 4 + 8 * 4 + 8 * 4 + 8 * 5 + 8 * 2;
-        let mut v1 = bytes[..at].to_vec();
-        v1.extend_from_slice(&bytes[at + 8..bytes.len() - 8]);
-        v1[8..12].copy_from_slice(&1u32.to_le_bytes());
-        let hash = fnv1a(&v1);
-        v1.extend_from_slice(&hash.to_le_bytes());
-        v1
+    /// Re-seals `body` (a file without its trailing hash) as `version`.
+    fn seal(mut body: Vec<u8>, version: u32) -> Vec<u8> {
+        body[8..12].copy_from_slice(&version.to_le_bytes());
+        let hash = fnv1a(&body);
+        body.extend_from_slice(&hash.to_le_bytes());
+        body
     }
 
-    /// Version 1 files resume with the persistence 1 (the predictor they
-    /// were written with); a persistence outside [0, 1] and a version this
-    /// drape does not know are refused.
+    /// The same file as version 2 wrote it (without segment, step size and
+    /// still steps) or version 1 (without the persistence too).
+    fn as_version(bytes: &[u8], version: u32) -> Vec<u8> {
+        // magic, version, 4 header u64, 4 counters u64, 5 counter fields:
+        // version 3's segment, step size and still steps follow; then
+        // time and external work, and the persistence.
+        let counters_end = 8 + 4 + 8 * 4 + 8 * 4 + 8 * 5;
+        let persistence = counters_end + 8 * 3 + 8 * 2;
+        let mut old = bytes[..counters_end].to_vec();
+        let skip = if version == 1 {
+            old.extend_from_slice(&bytes[counters_end + 24..persistence]);
+            persistence + 8
+        } else {
+            counters_end + 24
+        };
+        old.extend_from_slice(&bytes[skip..bytes.len() - 8]);
+        seal(old, version)
+    }
+
+    /// Versions 1 and 2 resume with 0 for the adaptive steps' segment and
+    /// step size and the rest criterion's still steps (a fixed schedule's
+    /// values), version 1 with the persistence 1 (the predictor it was
+    /// written with).
     #[test]
-    fn reads_version_1_and_refuses_a_persistence_out_of_range() {
+    fn reads_versions_1_and_2_with_defaults_for_the_new_fields() {
         let c = sample(true);
         let bytes = c.to_bytes();
-        let old = Checkpoint::from_bytes(&as_version_1(&bytes), 6, 2, 0xdead_beef).unwrap();
         let mut expected = c.clone();
+        expected.counters.segment = 0;
+        expected.counters.step_size = 0.0;
+        expected.counters.still_steps = 0;
+        let v2 = Checkpoint::from_bytes(&as_version(&bytes, 2), 6, 2, 0xdead_beef).unwrap();
+        assert_eq!(v2, expected);
         expected.state.persistence = 1.0;
-        assert_eq!(old, expected);
-        let mut bad = c;
-        bad.state.persistence = 1.5;
-        let e = Checkpoint::from_bytes(&bad.to_bytes(), 6, 2, 0xdead_beef).unwrap_err();
-        assert!(e.to_string().contains("persistence 1.5"), "{e}");
+        let v1 = Checkpoint::from_bytes(&as_version(&bytes, 1), 6, 2, 0xdead_beef).unwrap();
+        assert_eq!(v1, expected);
+    }
+
+    /// Values out of range are refused naming the field: a persistence
+    /// outside [0, 1], a step size that is not finite or negative, still
+    /// steps that would have ended the run; and a version this drape does
+    /// not know.
+    #[test]
+    fn refuses_values_out_of_range_and_unknown_versions() {
+        let refused = |change: &dyn Fn(&mut Checkpoint), says: &str| {
+            let mut bad = sample(true);
+            change(&mut bad);
+            let e = Checkpoint::from_bytes(&bad.to_bytes(), 6, 2, 0xdead_beef).unwrap_err();
+            assert!(e.to_string().contains(says), "{e}");
+        };
+        refused(&|c| c.state.persistence = 1.5, "persistence 1.5");
+        refused(&|c| c.counters.step_size = f64::NAN, "step size NaN");
+        refused(&|c| c.counters.step_size = -1e-3, "step size -0.001");
+        refused(&|c| c.counters.step_size = f64::INFINITY, "step size inf");
+        refused(&|c| c.counters.still_steps = REST_STEPS, "still steps 10");
         // A later version is refused by name.
-        let mut later = as_version_1(&bad.to_bytes());
+        let mut later = sample(true).to_bytes();
         later.truncate(later.len() - 8);
-        later[8..12].copy_from_slice(&3u32.to_le_bytes());
-        let hash = fnv1a(&later);
-        later.extend_from_slice(&hash.to_le_bytes());
+        let later = seal(later, 4);
         let e = Checkpoint::from_bytes(&later, 6, 2, 0xdead_beef).unwrap_err();
         assert!(
             e.to_string()
-                .contains("version 3, this drape reads versions 1 to 2"),
+                .contains("version 4, this drape reads versions 1 to 3"),
             "{e}"
         );
     }
