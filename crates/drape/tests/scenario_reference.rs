@@ -56,23 +56,31 @@ fn readme_documents_every_scenario_key() {
         ("`[[monitor]]`", "[[monitor]]\nzzz = 1\n"),
     ];
     for (heading, probe) in cases {
-        let keys = accepted_keys(probe);
-        assert!(!keys.is_empty(), "{heading}");
-        let text = section(&readme, heading);
-        for key in keys {
-            if heading == "top level" && key != "title" {
-                // Tables, documented under their own headings.
-                assert!(
-                    readme.contains(&format!("`[{key}]`"))
-                        || readme.contains(&format!("`[[{key}]]`")),
-                    "README lacks table {key}"
-                );
-                continue;
-            }
+        check_section(&readme, heading, probe, "");
+    }
+    // Keys of the tables inside a table, documented as `table.key`.
+    check_section(&readme, "`[time]`", "[time]\nrest = { zzz = 1 }\n", "rest.");
+}
+
+/// Every key the parser accepts for `probe` appears as `` `{prefix}key` ``
+/// in the README section `heading` (tables of the top level under their
+/// own headings).
+fn check_section(readme: &str, heading: &str, probe: &str, prefix: &str) {
+    let keys = accepted_keys(probe);
+    assert!(!keys.is_empty(), "{heading}");
+    let text = section(readme, heading);
+    for key in keys {
+        if heading == "top level" && key != "title" {
+            // Tables, documented under their own headings.
             assert!(
-                text.contains(&format!("`{key}`")),
-                "README section {heading} lacks `{key}`"
+                readme.contains(&format!("`[{key}]`")) || readme.contains(&format!("`[[{key}]]`")),
+                "README lacks table {key}"
             );
+            continue;
         }
+        assert!(
+            text.contains(&format!("`{prefix}{key}`")),
+            "README section {heading} lacks `{prefix}{key}`"
+        );
     }
 }

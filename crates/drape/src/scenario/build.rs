@@ -3,7 +3,7 @@
 use super::locate::line_of;
 use super::{
     AnalysisKind, BoxSpec, FixSpec, LoadKindSpec, LoadSpec, MeshShape, MeshSpec, Scenario,
-    ScenarioError,
+    ScenarioError, TimeSpec,
 };
 use crate::contact::{ContactMethod, ContactModel, RigidBody};
 use crate::element::membrane::Section;
@@ -12,6 +12,7 @@ use crate::load::{Load, LoadKind};
 use crate::material::{Material, SaintVenantKirchhoff, Wrinkling, WrinklingModel};
 use crate::mesh::{ElementOrder, Mesh, generate};
 use crate::model::Model;
+use crate::simulation::schedule::{AdaptiveSteps, RestCriterion};
 use crate::solver::NewtonSettings;
 use std::path::{Path, PathBuf};
 
@@ -56,6 +57,11 @@ pub struct Setup {
     pub model: Model,
     /// Dynamic or static.
     pub analysis: Analysis,
+    /// Adaptive time steps (`[time] adaptive = true`); `None`: the
+    /// segments' fixed steps (and always in statics).
+    pub adaptive: Option<AdaptiveSteps>,
+    /// The rest criterion (`[time] rest`), if any (dynamic analysis only).
+    pub rest: Option<RestCriterion>,
     /// Newton settings.
     pub newton: NewtonSettings,
     /// Most halvings of a failing step.
@@ -64,7 +70,8 @@ pub struct Setup {
     pub output_every: usize,
     /// Monitored nodes.
     pub monitors: Vec<Monitor>,
-    /// Write a checkpoint every this many scheduled steps (0: never).
+    /// Write a checkpoint every this many scheduled steps (with adaptive
+    /// steps: converged steps; 0: never).
     pub checkpoint_every: usize,
     /// How linear systems are solved.
     pub linear: crate::solver::LinearMode,
@@ -169,6 +176,21 @@ impl Checker<'_> {
         }
     }
 
+    /// As [`Self::invalid`] for `sub` inside the table `key` of `table`
+    /// (`rest = { speed = ... }`, `rest.speed = ...` or `[time.rest]`):
+    /// the key path `table.key.sub`, the line of `sub` in a `[table.key]`
+    /// table, else the line of `key`.
+    fn invalid_in(&self, table: &str, key: &str, sub: &str, message: String) -> ScenarioError {
+        let nested = format!("{table}.{key}");
+        ScenarioError::Invalid {
+            file: self.file.to_path_buf(),
+            line: line_of(self.source, &nested, None, sub)
+                .or_else(|| line_of(self.source, table, None, key)),
+            key: format!("{nested}.{sub}"),
+            message,
+        }
+    }
+
     fn absent<T>(
         &self,
         table: &str,
@@ -258,6 +280,7 @@ impl Scenario {
         }
         let contact = build_contact(&c, self, &base)?;
 
+        let (mut adaptive, mut rest) = (None, None);
         let analysis = match self.analysis.kind {
             AnalysisKind::Dynamic => {
                 c.absent(
@@ -273,6 +296,13 @@ impl Scenario {
                     "segments",
                     &self.time,
                     "for a dynamic analysis (a [time] table with segments)",
+                )?;
+                let segment_specs = c.required(
+                    "time",
+                    None,
+                    "segments",
+                    &time.segments,
+                    "for a dynamic analysis ([{ steps = N, dt = h }, ...])",
                 )?;
                 if !(time.beta.is_finite() && time.beta > 0.0) {
                     return Err(c.invalid(
@@ -293,7 +323,7 @@ impl Scenario {
                         ),
                     ));
                 }
-                if time.segments.is_empty() {
+                if segment_specs.is_empty() {
                     return Err(c.invalid(
                         "time",
                         None,
@@ -302,7 +332,7 @@ impl Scenario {
                     ));
                 }
                 let mut segments = Vec::new();
-                for (k, s) in time.segments.iter().enumerate() {
+                for (k, s) in segment_specs.iter().enumerate() {
                     if s.steps == 0 {
                         return Err(c.invalid(
                             "time",
@@ -324,6 +354,8 @@ impl Scenario {
                     }
                     segments.push((s.steps, s.dt));
                 }
+                adaptive = build_adaptive(&c, &time, &segments)?;
+                rest = build_rest(&c, &time)?;
                 Analysis::Dynamic {
                     newmark: Newmark {
                         beta: time.beta,
@@ -333,7 +365,17 @@ impl Scenario {
                 }
             }
             AnalysisKind::Static => {
-                if self.time.is_some() {
+                if let Some(time) = &self.time {
+                    c.none_of(
+                        "time",
+                        None,
+                        &[
+                            ("adaptive", time.adaptive.is_some()),
+                            ("dt_max", time.dt_max.is_some()),
+                            ("rest", time.rest.is_some()),
+                        ],
+                        "to a static analysis: adaptive steps and the rest criterion are for dynamic runs (to settle a fabric to rest, run it dynamically with beta = 1, gamma = 1.5)",
+                    )?;
                     return Err(c.invalid(
                         "time",
                         None,
@@ -478,6 +520,8 @@ impl Scenario {
             title,
             model,
             analysis,
+            adaptive,
+            rest,
             newton: NewtonSettings {
                 tolerance: s.tolerance,
                 residual_tolerance: s.residual_tolerance,
@@ -493,6 +537,70 @@ impl Scenario {
             scenario_hash: fnv1a(source.as_bytes()),
         })
     }
+}
+
+/// The adaptive steps of `[time]`, or `None` without `adaptive = true`;
+/// `dt_max` must be positive and at least every segment's `dt`.
+fn build_adaptive(
+    c: &Checker,
+    time: &TimeSpec,
+    segments: &[(usize, f64)],
+) -> Result<Option<AdaptiveSteps>, ScenarioError> {
+    if time.adaptive != Some(true) {
+        c.absent(
+            "time",
+            None,
+            "dt_max",
+            &time.dt_max,
+            "without adaptive = true (fixed steps are the segments' dt)",
+        )?;
+        return Ok(None);
+    }
+    let Some(dt_max) = time.dt_max else {
+        return Ok(Some(AdaptiveSteps { dt_max: None }));
+    };
+    let dt_max = c.positive("time", None, "dt_max", dt_max)?;
+    if let Some((k, (_, dt))) = segments.iter().enumerate().find(|(_, s)| s.1 > dt_max) {
+        return Err(c.invalid(
+            "time",
+            None,
+            "dt_max",
+            format!(
+                "= {dt_max} s is smaller than segment {k}'s dt = {dt} s: it must be at least every segment's dt"
+            ),
+        ));
+    }
+    Ok(Some(AdaptiveSteps {
+        dt_max: Some(dt_max),
+    }))
+}
+
+/// The rest criterion of `[time]`, if given: `speed` positive and finite,
+/// `after` finite and >= 0.
+fn build_rest(c: &Checker, time: &TimeSpec) -> Result<Option<RestCriterion>, ScenarioError> {
+    let Some(r) = time.rest else {
+        return Ok(None);
+    };
+    if !(r.speed.is_finite() && r.speed > 0.0) {
+        return Err(c.invalid_in(
+            "time",
+            "rest",
+            "speed",
+            format!("must be a positive finite speed (m/s), not {}", r.speed),
+        ));
+    }
+    if !(r.after.is_finite() && r.after >= 0.0) {
+        return Err(c.invalid_in(
+            "time",
+            "rest",
+            "after",
+            format!("must be a finite time >= 0 (s), not {}", r.after),
+        ));
+    }
+    Ok(Some(RestCriterion {
+        speed: r.speed,
+        after: r.after,
+    }))
 }
 
 fn build_contact(

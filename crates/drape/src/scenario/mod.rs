@@ -323,7 +323,31 @@ pub struct TimeSpec {
     #[serde(default = "default_gamma")]
     pub gamma: f64,
     /// The schedule: segments of `steps` steps of size `dt` (s). Required.
-    pub segments: Vec<SegmentSpec>,
+    pub segments: Option<Vec<SegmentSpec>>,
+    /// Adaptive steps: `dt` grows after easy steps (few Newton iterations,
+    /// up to `dt_max`) and shrinks after hard ones; each segment still ends
+    /// at its own end time (`steps` x `dt`) and no step crosses it. Default
+    /// false: the segments' fixed steps. Dynamic analysis only.
+    pub adaptive: Option<bool>,
+    /// Adaptive steps: the largest step (s), >= every segment's `dt`.
+    /// Default: 10 x each segment's `dt`. Only with `adaptive = true`.
+    pub dt_max: Option<f64>,
+    /// Rest criterion, optional: the run ends (status "completed", a
+    /// message saying "at rest") once every node's speed has stayed below
+    /// `rest.speed` for 10 consecutive steps, not counting steps before
+    /// `rest.after`. Dynamic analysis only.
+    pub rest: Option<RestSpec>,
+}
+
+/// `[time] rest = { speed, after }`: when a dynamic run is at rest.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RestSpec {
+    /// Every node slower than this (m/s), > 0 and finite. Required.
+    pub speed: f64,
+    /// Steps ending before this time (s) do not count, >= 0. Default 0.
+    #[serde(default)]
+    pub after: f64,
 }
 
 fn default_beta() -> f64 {
@@ -411,7 +435,8 @@ pub struct OutputSpec {
     #[serde(default = "default_every")]
     pub every: usize,
     /// Write a checkpoint (the full state, to resume from) every N
-    /// scheduled steps; 0 (default): only when interrupted.
+    /// scheduled steps (with adaptive steps: every N converged steps); 0
+    /// (default): only when interrupted.
     #[serde(default)]
     pub checkpoint_every: usize,
 }

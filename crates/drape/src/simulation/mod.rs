@@ -8,6 +8,14 @@
 //! the last converged state is written as a field frame, the history holds
 //! every converged step, and `summary.json` says `"failed"` and why.
 //!
+//! With `[time] adaptive = true` the steps are sized by a controller
+//! instead (`schedule.rs`, [`schedule::StepController`]): they grow after
+//! easy steps and shrink after hard ones, end every segment at its end
+//! time, and a failing step is halved and retried, the controller going on
+//! from the smaller size. With `[time] rest` the run ends, completed, once
+//! every node has been slower than the rest speed for
+//! [`schedule::REST_STEPS`] consecutive steps ([`schedule::RestWatch`]).
+//!
 //! The history rows are written and flushed by the loop itself, one per
 //! step. The field frames are handed to a writer thread (`frames.rs`)
 //! that writes them in order while the loop goes on; the loop waits for it
@@ -23,6 +31,7 @@ mod frames;
 pub mod schedule;
 use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
 use crate::integrator::{State, StaticStepper};
+use crate::model::Model;
 use crate::output::atomic::write_atomic;
 use crate::output::history::HistoryWriter;
 use crate::output::pvd::{PvdWriter, frame_relative_path};
@@ -30,6 +39,7 @@ use crate::scenario::{Analysis, Setup};
 use crate::solver::NewtonError;
 pub use checkpoint::{Checkpoint, CheckpointError, Counters};
 use frames::Snapshot;
+use schedule::{RestWatch, StepController, fastest_node};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -50,9 +60,10 @@ pub struct StepInfo {
     /// End time of the schedule (s), or 1 in statics.
     pub end_time: f64,
     /// Scheduled steps completed, counting this one (cut-back sub-steps
-    /// belong to their scheduled step).
+    /// belong to their scheduled step); 0 with adaptive steps, whose
+    /// progress is `time / end_time`.
     pub scheduled_done: usize,
-    /// Scheduled steps in all.
+    /// Scheduled steps in all; 0 with adaptive steps.
     pub scheduled_total: usize,
     /// Size of this step.
     pub dt: f64,
@@ -73,8 +84,13 @@ pub struct StepInfo {
 pub struct Summary {
     /// `"completed"`, `"failed"` or `"interrupted"`.
     pub status: String,
-    /// Human-readable outcome.
+    /// Human-readable outcome; it says "at rest" when the rest criterion
+    /// ended the run.
     pub message: String,
+    /// Whether the rest criterion ended the run; absent without a rest
+    /// criterion (`[time] rest`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub at_rest: Option<bool>,
     /// Scenario title.
     pub title: String,
     /// Converged steps.
@@ -355,22 +371,17 @@ pub fn run_with(
         Analysis::Static { steps } => (vec![(*steps, 1.0 / *steps as f64)], 1.0),
     };
     let history_path = out.join("history.csv");
-    let contact_report = |state: &State| {
-        model
-            .contact
-            .as_ref()
-            .zip(state.contact.as_ref())
-            .map(|(c, s)| c.report(&state.positions, state.time, s))
-    };
     // `written`: the frames handed to the writer thread, `(time, step)`;
     // a fresh run also has its initial frame to hand over.
-    let (mut state, mut counters, mut history, pvd, mut written, initial_frame) = if control.resume
-    {
+    let (state, counters, controller, history, pvd, written, initial_frame) = if control.resume {
         let bodies = model.contact.as_ref().map_or(0, |c| c.bodies.len());
         let path = checkpoint_path(out);
         let bytes = std::fs::read(&path)
             .map_err(|e| RunError::Resume(format!("{}: {e}", path.display())))?;
         let ck = Checkpoint::from_bytes(&bytes, model.dofs(), bodies, setup.scenario_hash)
+            .map_err(|e| RunError::Resume(format!("{}: {e}", path.display())))?;
+        // Checked before the history and the collection are cut back.
+        let controller = step_controller(setup, &ck.counters)
             .map_err(|e| RunError::Resume(format!("{}: {e}", path.display())))?;
         ws.f_ext.copy_from_slice(&ck.external_forces);
         let entries = ck
@@ -389,7 +400,15 @@ pub fn run_with(
             scratch: vec![0.0; model.dofs()],
         };
         let pvd = PvdWriter::resume(out.join("fields.pvd"), entries).map_err(io_err(out))?;
-        (ck.state, ck.counters, history, pvd, ck.frames, None)
+        (
+            ck.state,
+            ck.counters,
+            controller,
+            history,
+            pvd,
+            ck.frames,
+            None,
+        )
     } else {
         let state = match &setup.analysis {
             Analysis::Dynamic { newmark, .. } => match newmark.initial_state(model, &mut ws) {
@@ -414,7 +433,7 @@ pub fn run_with(
         };
         let strain0 = model.strain_energy(&state.positions);
         let (stretch0, fractions0) = model.stretch_and_states(&state.positions);
-        let contact0 = contact_report(&state);
+        let contact0 = contact_report(model, &state);
         history.row(
             &state,
             &StepRecord {
@@ -434,15 +453,21 @@ pub fn run_with(
             ..Counters::default()
         };
         let pvd = PvdWriter::new(out.join("fields.pvd"));
+        let controller =
+            step_controller(setup, &counters).map_err(|e| setup_failure(setup, out, start, e))?;
         (
             state,
             counters,
+            controller,
             history,
             pvd,
             vec![(0.0, 0)],
             Some(initial_frame),
         )
     };
+    let rest = setup
+        .rest
+        .map(|criterion| RestWatch::new(criterion, counters.still_steps));
     // The frames' thread borrows the model and the output directory; the
     // scope ends only when it has written every frame handed to it.
     std::thread::scope(|scope| {
@@ -456,198 +481,377 @@ pub fn run_with(
         if let Some(snapshot) = initial_frame {
             frame_writer.submit(snapshot)?;
         }
-        let setup_seconds = start.elapsed().as_secs_f64();
-        let mut output_seconds = 0.0;
-        let mut first_step_seconds = None;
-        let mut last_contact = contact_report(&state);
-        let mut failure: Option<RunError> = None;
-        let mut interrupted = false;
+        let mut run = Stepper {
+            setup,
+            out,
+            start,
+            setup_seconds: start.elapsed().as_secs_f64(),
+            length,
+            end_time,
+            scheduled_total: if controller.is_some() {
+                0
+            } else {
+                schedule.iter().map(|(n, _)| n).sum()
+            },
+            stop: control.stop,
+            ws: &mut ws,
+            last_contact: contact_report(model, &state),
+            state,
+            counters,
+            history,
+            frame_writer,
+            written,
+            output_seconds: 0.0,
+            first_step_seconds: None,
+            rest,
+            observer,
+        };
+        let end = match controller {
+            Some(controller) => run.adaptive(controller)?,
+            None => run.fixed(&schedule)?,
+        };
+        run.finish(end)
+    })
+}
+
+/// The step controller of an adaptive run (`None` for fixed steps) where
+/// `counters` left it: a fresh run's start in the first segment at its
+/// `dt`, or a checkpoint's segment and step size, refused (`Err`) when
+/// they do not fit the schedule.
+fn step_controller(setup: &Setup, counters: &Counters) -> Result<Option<StepController>, String> {
+    match (&setup.adaptive, &setup.analysis) {
+        (Some(adaptive), Analysis::Dynamic { segments, .. }) => {
+            StepController::new(segments, *adaptive, setup.max_cutbacks)
+                .resume(counters.segment, counters.step_size)
+                .map(Some)
+        }
+        _ => Ok(None),
+    }
+}
+
+/// How the loop over the schedule ended.
+enum End {
+    /// The schedule's end.
+    Done,
+    /// The rest criterion was met.
+    AtRest,
+    /// Stopped on request; a checkpoint was written.
+    Interrupted,
+    /// A step failed, or the material became unstable.
+    Failed(RunError),
+}
+
+/// The run loop's state: what it steps, what it writes, what it counts.
+struct Stepper<'a, 'scope> {
+    setup: &'a Setup,
+    out: &'a Path,
+    start: Instant,
+    /// Wall time of the set-up (s).
+    setup_seconds: f64,
+    /// `|X|` of Newton's test (m).
+    length: f64,
+    /// End time of the schedule (s), or 1 in statics.
+    end_time: f64,
+    /// Scheduled steps in all (0 with adaptive steps).
+    scheduled_total: usize,
+    stop: Option<&'a AtomicBool>,
+    ws: &'a mut DynamicWorkspace,
+    state: State,
+    counters: Counters,
+    history: History<'a>,
+    frame_writer: frames::FrameWriter<'scope>,
+    /// The frames handed to the writer thread, `(time, step)`.
+    written: Vec<(f64, usize)>,
+    last_contact: Option<ContactReport>,
+    /// The loop's own output work (s).
+    output_seconds: f64,
+    first_step_seconds: Option<f64>,
+    rest: Option<RestWatch>,
+    observer: &'a mut dyn FnMut(&StepInfo),
+}
+
+impl Stepper<'_, '_> {
+    /// The segments' fixed steps: each scheduled step is tried whole, and a
+    /// failing one is split in two halves, recursively up to
+    /// `max_cutbacks` halvings; the next scheduled step takes the
+    /// scheduled size again.
+    fn fixed(&mut self, schedule: &[(usize, f64)]) -> Result<End, RunError> {
         let mut k = 0usize; // scheduled-step index
-        'schedule: for (count, dt) in &schedule {
+        for (count, dt) in schedule {
             for _ in 0..*count {
                 k += 1;
-                if k <= counters.scheduled_done {
+                if k <= self.counters.scheduled_done {
                     continue;
                 }
                 // Each scheduled step may be split into 2^k sub-steps.
                 let mut pending: Vec<(f64, usize)> = vec![(*dt, 0)];
                 while let Some((h, depth)) = pending.pop() {
-                    let result = advance(setup, &mut state, h, length, &mut ws);
-                    match result {
+                    match self.attempt(h) {
                         Ok(outcome) => {
-                            counters.step += 1;
-                            let step = counters.step;
-                            counters.iterations += outcome.newton.iterations;
-                            if depth > 0 {
-                                counters.cutback_steps += 1;
-                            }
-                            counters.last_strain = outcome.strain_energy;
-                            let ((stretch, element), fractions) =
-                                model.stretch_and_states(&state.positions);
-                            last_contact = contact_report(&state);
-                            if counters.first_contact_time.is_none()
-                                && last_contact.as_ref().is_some_and(|c| c.active > 0)
-                            {
-                                counters.first_contact_time = Some(state.time);
-                            }
-                            if first_step_seconds.is_none() {
-                                first_step_seconds =
-                                    Some(start.elapsed().as_secs_f64() - setup_seconds);
-                            }
-                            let output_start = Instant::now();
-                            let kinetic = history.row(
-                                &state,
-                                &StepRecord {
-                                    step,
-                                    dt: h,
-                                    iterations: outcome.newton.iterations,
-                                    strain: outcome.strain_energy,
-                                    cutbacks: depth,
-                                    min_stretch: stretch,
-                                    contact: last_contact.clone(),
-                                    states: fractions,
-                                },
-                            )?;
-                            output_seconds += output_start.elapsed().as_secs_f64();
-                            observer(&StepInfo {
-                                step,
-                                time: state.time,
-                                end_time,
-                                scheduled_done: k,
-                                scheduled_total: schedule.iter().map(|(n, _)| n).sum(),
-                                dt: h,
-                                iterations: outcome.newton.iterations,
-                                cutbacks: depth,
-                                kinetic_energy: kinetic,
-                                strain_energy: outcome.strain_energy,
-                                external_work: state.external_work,
-                            });
-                            counters.since_frame += 1;
-                            if counters.since_frame >= setup.output_every {
-                                let output_start = Instant::now();
-                                frame_writer.submit(Snapshot::of(
-                                    step,
-                                    &state,
-                                    last_contact.as_ref(),
-                                ))?;
-                                output_seconds += output_start.elapsed().as_secs_f64();
-                                written.push((state.time, step));
-                                counters.last_written = step;
-                                counters.since_frame = 0;
-                            }
-                            // With a wrinkling model compression carries no
-                            // stress, and the instability does not exist.
-                            if stretch < SVK_CRITICAL_STRETCH
-                                && model.material.wrinkle_state([0.0; 3]).is_none()
-                            {
-                                failure = Some(RunError::MaterialInstability {
-                                    time: state.time,
-                                    element,
-                                    stretch,
-                                    out: out.to_path_buf(),
-                                });
-                                break 'schedule;
+                            if let Some(end) = self.record(&outcome, h, depth, k)? {
+                                return Ok(end);
                             }
                         }
-                        Err(e) if depth < setup.max_cutbacks => {
-                            let _ = e;
+                        Err(_) if depth < self.setup.max_cutbacks => {
                             pending.push((0.5 * h, depth + 1));
                             pending.push((0.5 * h, depth + 1));
                         }
-                        Err(e) => {
-                            failure = Some(RunError::Step {
-                                step: counters.step,
-                                time: state.time,
-                                dt: h,
-                                cutbacks: depth,
-                                cause: e,
-                                hint: if matches!(setup.analysis, Analysis::Static { .. }) {
-                                    "; a static analysis needs a membrane in tension from the first increment on (prestress, or supports that stretch it): a slack membrane has no stiffness across its plane, so run it dynamically to rest instead (beta = 1, gamma = 1.5)".into()
-                                } else {
-                                    String::new()
-                                },
-                                out: out.to_path_buf(),
-                            });
-                            break 'schedule;
-                        }
+                        Err(e) => return Ok(End::Failed(self.step_failure(h, depth, e))),
                     }
                 }
-                counters.scheduled_done = k;
-                let stop = control.stop.is_some_and(|s| s.load(Ordering::SeqCst));
-                let every = setup.checkpoint_every;
-                if stop || (every > 0 && k.is_multiple_of(every)) {
-                    // The checkpoint lists the frames as written: they must
-                    // be, or a resumed collection would name missing files.
-                    let output_start = Instant::now();
-                    frame_writer.flush()?;
-                    output_seconds += output_start.elapsed().as_secs_f64();
-                    let ck = Checkpoint {
-                        scenario_hash: setup.scenario_hash,
-                        counters: Counters {
-                            wall_seconds: counters.wall_seconds + start.elapsed().as_secs_f64(),
-                            ..counters
-                        },
-                        state: state.clone(),
-                        external_forces: ws.f_ext.clone(),
-                        frames: written.clone(),
-                    };
-                    let path = checkpoint_path(out);
-                    write_atomic(&path, &ck.to_bytes()).map_err(io_err(&path))?;
-                }
-                if stop {
-                    interrupted = true;
-                    break 'schedule;
+                self.counters.scheduled_done = k;
+                if let Some(end) = self.between_steps(k)? {
+                    return Ok(end);
                 }
             }
         }
+        Ok(End::Done)
+    }
+
+    /// Adaptive steps, sized by `controller` (see [`StepController`]). A
+    /// checkpoint is written every `checkpoint_every` converged steps, and
+    /// records the controller's segment and step size.
+    fn adaptive(&mut self, mut controller: StepController) -> Result<End, RunError> {
+        while let Some(h) = controller.next_step(self.state.time) {
+            match self.attempt(h) {
+                Ok(outcome) => {
+                    let halvings = controller.converged(outcome.newton.iterations);
+                    self.counters.segment = controller.segment();
+                    self.counters.step_size = controller.step_size();
+                    if let Some(end) = self.record(&outcome, h, halvings, 0)? {
+                        return Ok(end);
+                    }
+                    if let Some(end) = self.between_steps(self.counters.step)? {
+                        return Ok(end);
+                    }
+                }
+                Err(_) if controller.failed() => {}
+                Err(e) => {
+                    let halvings = controller.halvings();
+                    return Ok(End::Failed(self.step_failure(h, halvings, e)));
+                }
+            }
+        }
+        Ok(End::Done)
+    }
+
+    fn attempt(&mut self, h: f64) -> Result<StepOutcome, NewtonError> {
+        advance(self.setup, &mut self.state, h, self.length, self.ws)
+    }
+
+    /// Books a converged step of size `h` that needed `cutbacks` halvings:
+    /// counters, history row, observer, field frame; then the checks that
+    /// may end the run (material instability, rest).
+    fn record(
+        &mut self,
+        outcome: &StepOutcome,
+        h: f64,
+        cutbacks: usize,
+        scheduled_done: usize,
+    ) -> Result<Option<End>, RunError> {
+        let model = &self.setup.model;
+        let state = &self.state;
+        let counters = &mut self.counters;
+        counters.step += 1;
+        let step = counters.step;
+        counters.iterations += outcome.newton.iterations;
+        if cutbacks > 0 {
+            counters.cutback_steps += 1;
+        }
+        counters.last_strain = outcome.strain_energy;
+        let ((stretch, element), fractions) = model.stretch_and_states(&state.positions);
+        self.last_contact = contact_report(model, state);
+        if counters.first_contact_time.is_none()
+            && self.last_contact.as_ref().is_some_and(|c| c.active > 0)
+        {
+            counters.first_contact_time = Some(state.time);
+        }
+        if self.first_step_seconds.is_none() {
+            self.first_step_seconds = Some(self.start.elapsed().as_secs_f64() - self.setup_seconds);
+        }
         let output_start = Instant::now();
-        if counters.last_written != counters.step && !interrupted {
-            frame_writer.submit(Snapshot::of(counters.step, &state, last_contact.as_ref()))?;
+        let kinetic = self.history.row(
+            state,
+            &StepRecord {
+                step,
+                dt: h,
+                iterations: outcome.newton.iterations,
+                strain: outcome.strain_energy,
+                cutbacks,
+                min_stretch: stretch,
+                contact: self.last_contact.clone(),
+                states: fractions,
+            },
+        )?;
+        self.output_seconds += output_start.elapsed().as_secs_f64();
+        (self.observer)(&StepInfo {
+            step,
+            time: state.time,
+            end_time: self.end_time,
+            scheduled_done,
+            scheduled_total: self.scheduled_total,
+            dt: h,
+            iterations: outcome.newton.iterations,
+            cutbacks,
+            kinetic_energy: kinetic,
+            strain_energy: outcome.strain_energy,
+            external_work: state.external_work,
+        });
+        counters.since_frame += 1;
+        if counters.since_frame >= self.setup.output_every {
+            let output_start = Instant::now();
+            self.frame_writer
+                .submit(Snapshot::of(step, state, self.last_contact.as_ref()))?;
+            self.output_seconds += output_start.elapsed().as_secs_f64();
+            self.written.push((state.time, step));
+            counters.last_written = step;
+            counters.since_frame = 0;
+        }
+        // With a wrinkling model compression carries no stress, and the
+        // instability does not exist.
+        if stretch < SVK_CRITICAL_STRETCH && model.material.wrinkle_state([0.0; 3]).is_none() {
+            return Ok(Some(End::Failed(RunError::MaterialInstability {
+                time: state.time,
+                element,
+                stretch,
+                out: self.out.to_path_buf(),
+            })));
+        }
+        if let Some(watch) = &mut self.rest {
+            let at_rest = watch.observe(state.time, fastest_node(&state.velocities));
+            counters.still_steps = watch.still_steps();
+            if at_rest {
+                return Ok(Some(End::AtRest));
+            }
+        }
+        Ok(None)
+    }
+
+    /// Between two steps, `count` steps into the schedule: a checkpoint
+    /// every `checkpoint_every`, and when a stop is requested (then the
+    /// run ends, interrupted).
+    fn between_steps(&mut self, count: usize) -> Result<Option<End>, RunError> {
+        let stop = self.stop.is_some_and(|s| s.load(Ordering::SeqCst));
+        let every = self.setup.checkpoint_every;
+        if stop || (every > 0 && count.is_multiple_of(every)) {
+            self.checkpoint()?;
+        }
+        Ok(stop.then_some(End::Interrupted))
+    }
+
+    fn checkpoint(&mut self) -> Result<(), RunError> {
+        // The checkpoint lists the frames as written: they must be, or a
+        // resumed collection would name missing files.
+        let output_start = Instant::now();
+        self.frame_writer.flush()?;
+        self.output_seconds += output_start.elapsed().as_secs_f64();
+        let ck = Checkpoint {
+            scenario_hash: self.setup.scenario_hash,
+            counters: Counters {
+                wall_seconds: self.counters.wall_seconds + self.start.elapsed().as_secs_f64(),
+                ..self.counters
+            },
+            state: self.state.clone(),
+            external_forces: self.ws.f_ext.clone(),
+            frames: self.written.clone(),
+        };
+        let path = checkpoint_path(self.out);
+        write_atomic(&path, &ck.to_bytes()).map_err(io_err(&path))
+    }
+
+    /// The error of a step that failed at size `h` after `cutbacks` halvings.
+    fn step_failure(&self, h: f64, cutbacks: usize, cause: NewtonError) -> RunError {
+        RunError::Step {
+            step: self.counters.step,
+            time: self.state.time,
+            dt: h,
+            cutbacks,
+            cause,
+            hint: if matches!(self.setup.analysis, Analysis::Static { .. }) {
+                "; a static analysis needs a membrane in tension from the first increment on (prestress, or supports that stretch it): a slack membrane has no stiffness across its plane, so run it dynamically to rest instead (beta = 1, gamma = 1.5)".into()
+            } else {
+                String::new()
+            },
+            out: self.out.to_path_buf(),
+        }
+    }
+
+    /// Writes the last frame and the summary once the loop has ended.
+    fn finish(mut self, end: End) -> Result<Summary, RunError> {
+        let setup = self.setup;
+        let interrupted = matches!(end, End::Interrupted);
+        let at_rest = matches!(end, End::AtRest);
+        let output_start = Instant::now();
+        if self.counters.last_written != self.counters.step && !interrupted {
+            self.frame_writer.submit(Snapshot::of(
+                self.counters.step,
+                &self.state,
+                self.last_contact.as_ref(),
+            ))?;
         }
         // Every frame is on disk before the summary says how the run ended.
-        let output_thread_seconds = frame_writer.finish()?.as_secs_f64();
-        output_seconds += output_start.elapsed().as_secs_f64();
-        let kinetic = model.kinetic_energy(&state.velocities, &mut history.scratch);
-        let message = if interrupted {
-            Some(format!(
+        let output_thread_seconds = self.frame_writer.finish()?.as_secs_f64();
+        self.output_seconds += output_start.elapsed().as_secs_f64();
+        let (state, counters) = (&self.state, &self.counters);
+        let kinetic = setup
+            .model
+            .kinetic_energy(&state.velocities, &mut self.history.scratch);
+        let interruption = interrupted.then(|| {
+            format!(
                 "interrupted after step {} at t = {:.6} s; resume with `drape run --resume {}`",
                 counters.step,
                 state.time,
-                out.display()
-            ))
-        } else {
-            failure.as_ref().map(ToString::to_string)
+                self.out.display()
+            )
+        });
+        let (failure, message) = match end {
+            End::Failed(e) => {
+                let message = e.to_string();
+                (Some(e), Some(message))
+            }
+            _ => (None, interruption.clone()),
         };
         let mut summary = summary(
             setup,
-            &state,
-            message.clone(),
+            state,
+            message,
             counters.step,
             counters.iterations,
             counters.cutback_steps,
-            start,
+            self.start,
             kinetic,
             counters.last_strain,
         );
         summary.wall_seconds += counters.wall_seconds;
-        summary.setup_seconds = setup_seconds;
-        summary.output_seconds = output_seconds;
+        summary.setup_seconds = self.setup_seconds;
+        summary.output_seconds = self.output_seconds;
         summary.output_thread_seconds = output_thread_seconds;
-        summary.first_step_seconds = first_step_seconds.unwrap_or(0.0);
-        summary.linear = ws.newton.linear.stats;
+        summary.first_step_seconds = self.first_step_seconds.unwrap_or(0.0);
+        summary.linear = self.ws.newton.linear.stats;
         summary.first_contact_time = counters.first_contact_time;
         if interrupted {
             summary.status = "interrupted".into();
         }
-        write_summary(out, &summary)?;
-        match (failure, interrupted) {
-            (Some(e), _) => Err(e),
-            (None, true) => Err(RunError::Interrupted {
-                message: message.unwrap_or_default(),
-            }),
-            (None, false) => Ok(summary),
+        if let Some(watch) = self.rest.filter(|_| at_rest) {
+            summary.message = watch.message(state.time, counters.step);
+            summary.at_rest = Some(true);
         }
-    })
+        write_summary(self.out, &summary)?;
+        match (failure, interruption) {
+            (Some(e), _) => Err(e),
+            (None, Some(message)) => Err(RunError::Interrupted { message }),
+            (None, None) => Ok(summary),
+        }
+    }
+}
+
+/// The contact report of `state`, if the model has contact.
+fn contact_report(model: &Model, state: &State) -> Option<ContactReport> {
+    model
+        .contact
+        .as_ref()
+        .zip(state.contact.as_ref())
+        .map(|(c, s)| c.report(&state.positions, state.time, s))
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -672,6 +876,7 @@ fn summary(
         .into(),
         message: failure
             .unwrap_or_else(|| format!("completed {steps} steps to t = {:.6} s", state.time)),
+        at_rest: setup.rest.map(|_| false),
         title: setup.title.clone(),
         steps,
         time: state.time,

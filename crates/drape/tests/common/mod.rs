@@ -70,12 +70,18 @@ pub fn column(header: &[String], rows: &[Vec<f64>], name: &str) -> Vec<f64> {
 
 /// A 20 x 20 fabric of the reference problem's material, with extra TOML.
 pub fn fabric(extra: &str) -> String {
+    rectangle([0.2, 0.2], [20, 20], extra)
+}
+
+/// A rectangle of `size` (m) in `divisions` squares, of the reference
+/// problem's material, with extra TOML.
+pub fn rectangle(size: [f64; 2], divisions: [usize; 2], extra: &str) -> String {
     format!(
         r#"
 [mesh]
 shape = "rectangle"
-size = [0.2, 0.2]
-divisions = [20, 20]
+size = {size:?}
+divisions = {divisions:?}
 [material]
 youngs_modulus = 2.0e6
 poisson_ratio = 0.3
