@@ -265,6 +265,21 @@ fn check(path: &Path) -> Result<(), Failure> {
                 "  dynamic   beta = {}, gamma = {}, {steps} steps to t = {end} s",
                 newmark.beta, newmark.gamma
             );
+            if let Some(adaptive) = &setup.adaptive {
+                let dt_max = match adaptive.dt_max {
+                    Some(dt_max) => format!("{dt_max} s"),
+                    None => "10 x each segment's dt".into(),
+                };
+                println!("  adaptive  steps grow after easy steps up to dt_max = {dt_max}");
+            }
+            if let Some(rest) = &setup.rest {
+                println!(
+                    "  rest      ends once every node is slower than {:e} m/s for {} steps, from t = {} s",
+                    rest.speed,
+                    drape::simulation::schedule::REST_STEPS,
+                    rest.after
+                );
+            }
         }
         drape::scenario::Analysis::Static { steps } => {
             println!("  static    {steps} load increments")
@@ -327,13 +342,20 @@ fn run(
     let terminal = std::io::stderr().is_terminal();
     let start = Instant::now();
     let mut last_print = Instant::now();
+    // Progress in scheduled steps: they, not simulated time, cost the
+    // wall time; adaptive steps are not known in advance, so there it is
+    // simulated time, in thousandths of the schedule.
+    let adaptive = setup.adaptive.is_some();
     let bar = (terminal && !quiet).then(|| {
         let bar = ProgressBar::new(1000);
+        let template = if adaptive {
+            "{bar:30.cyan/blue} {percent}% of the time, t = {msg} [{elapsed_precise} elapsed, {eta} left]"
+        } else {
+            "{bar:30.cyan/blue} {pos}/{len} steps, t = {msg} [{elapsed_precise} elapsed, {eta} left]"
+        };
         bar.set_style(
-            ProgressStyle::with_template(
-                "{bar:30.cyan/blue} {pos}/{len} steps, t = {msg} [{elapsed_precise} elapsed, {eta} left]",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            ProgressStyle::with_template(template)
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
         bar
     });
@@ -357,10 +379,13 @@ fn run(
             info.strain_energy
         );
         if let Some(bar) = &bar {
-            // Progress in scheduled steps: they, not simulated time, cost
-            // the wall time.
-            bar.set_length(info.scheduled_total as u64);
-            bar.set_position(info.scheduled_done as u64);
+            if adaptive {
+                let fraction = (info.time / info.end_time).clamp(0.0, 1.0);
+                bar.set_position((1000.0 * fraction) as u64);
+            } else {
+                bar.set_length(info.scheduled_total as u64);
+                bar.set_position(info.scheduled_done as u64);
+            }
             bar.set_message(format!(
                 "{:.4e} s, step {}, Newton {}{}",
                 info.time,
@@ -394,6 +419,9 @@ fn run(
     match result {
         Ok(summary) => {
             if !quiet {
+                if summary.at_rest == Some(true) {
+                    println!("{}", summary.message);
+                }
                 println!(
                     "completed {} steps to t = {:.6} s in {:.2} s ({} Newton iterations, {} cut-back steps)",
                     summary.steps,

@@ -555,6 +555,64 @@ fn failed_run_exits_1_and_still_writes_the_summary() {
     check_pvd(&out);
 }
 
+/// The cloth hanging from one edge of the library's settling tests (10 x
+/// 10 cm, damped: `beta = 1, gamma = 1.5`), with adaptive steps up to 0.1
+/// s and `time_extra` in `[time]`.
+fn hanging_cloth(time_extra: &str) -> String {
+    let cloth = include_str!("../../drape/tests/scenarios/hanging-from-edge.toml");
+    format!("{cloth}adaptive = true\ndt_max = 0.1\n{time_extra}\n[output]\nevery = 50\n")
+}
+
+/// A run that meets the rest criterion says so: `drape run` prints the
+/// "at rest" message, `summary.json` has it with `"at_rest": true`, and
+/// `drape plot` shows it under the title. Without a rest criterion the
+/// summary has no `at_rest` key.
+#[test]
+fn a_run_at_rest_says_so_in_the_terminal_the_summary_and_the_plot() {
+    let tmp = TempDir::new("at-rest");
+    let path = tmp.path().join("settle.toml");
+    let rest = "segments = [{ steps = 2000, dt = 0.01 }]\nrest = { speed = 1.0e-4, after = 0.2 }";
+    std::fs::write(&path, hanging_cloth(rest)).unwrap();
+    let out = tmp.path().join("out");
+    let o = run_scenario(tmp.path(), &path, &out);
+    let what = "drape run of a cloth settling to rest";
+    assert_eq!(o.status.code(), Some(0), "{}", describe(what, &o));
+    assert!(
+        stdout(&o).contains("at rest at t = "),
+        "{}",
+        describe(what, &o)
+    );
+    let s = read_summary(&out);
+    assert_eq!(s["status"], "completed", "{s}");
+    assert_eq!(s["at_rest"], true, "{s}");
+    let message = s["message"].as_str().unwrap();
+    assert!(message.contains("at rest"), "{s}");
+    assert!(s["time"].as_f64().unwrap() < 20.0, "{s}");
+    let o = drape_s(tmp.path(), &["plot", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe("drape plot", &o));
+    let (_, report) = drape_render::plot_image(&out, 600, 450).unwrap();
+    assert_eq!(report.note.as_deref(), Some(message));
+
+    let path = tmp.path().join("no-rest.toml");
+    std::fs::write(
+        &path,
+        hanging_cloth("segments = [{ steps = 3, dt = 0.01 }]"),
+    )
+    .unwrap();
+    let out = tmp.path().join("out-no-rest");
+    let o = run_scenario(tmp.path(), &path, &out);
+    assert_eq!(o.status.code(), Some(0), "{}", describe("drape run", &o));
+    let s = read_summary(&out);
+    assert!(s.get("at_rest").is_none(), "{s}");
+    assert!(
+        !stdout(&o).contains("at rest"),
+        "{}",
+        describe("drape run", &o)
+    );
+    let (_, report) = drape_render::plot_image(&out, 600, 450).unwrap();
+    assert_eq!(report.note, None);
+}
+
 // ---------------------------------------------------------------------------
 // drape example
 
@@ -923,6 +981,37 @@ const BAD_INPUTS: &[BadInput] = &[
     BadInput {
         file: "static_with_time.toml",
         fragments: &["`time.segments`", "does not apply to a static analysis"],
+        line: Some(20),
+    },
+    // --- adaptive steps and the rest criterion (SPEC §6.1)
+    BadInput {
+        file: "dt_max_below_dt.toml",
+        fragments: &["`time.dt_max`", "0.015", "segment 1's dt = 0.02"],
+        line: Some(18),
+    },
+    BadInput {
+        file: "dt_max_without_adaptive.toml",
+        fragments: &["`time.dt_max`", "does not apply without adaptive = true"],
+        line: Some(17),
+    },
+    BadInput {
+        file: "rest_speed_zero.toml",
+        fragments: &["`time.rest.speed`", "positive", "not 0"],
+        line: Some(17),
+    },
+    BadInput {
+        file: "rest_unknown_key.toml",
+        fragments: &["`time.rest`", "unknown field `aftr`", "`speed` or `after`"],
+        line: Some(17),
+    },
+    BadInput {
+        file: "static_with_rest.toml",
+        fragments: &["`time.rest`", "does not apply to a static analysis"],
+        line: Some(20),
+    },
+    BadInput {
+        file: "static_with_adaptive.toml",
+        fragments: &["`time.adaptive`", "does not apply to a static analysis"],
         line: Some(20),
     },
     BadInput {

@@ -84,6 +84,71 @@ fn resumed_run_reproduces_the_uninterrupted_one_bit_for_bit() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The cloth hanging from one edge of the library's settling tests,
+/// settling to rest with adaptive steps over two segments, checkpoints
+/// every `every` converged steps.
+fn settling(dir: &Path, every: usize) -> PathBuf {
+    let cloth = include_str!("../../drape/tests/scenarios/hanging-from-edge.toml");
+    let text = format!(
+        r#"{cloth}segments = [{{ steps = 30, dt = 0.005 }}, {{ steps = 2000, dt = 0.01 }}]
+adaptive = true
+dt_max = 0.1
+rest = {{ speed = 1.0e-4, after = 0.2 }}
+[output]
+every = 25
+checkpoint_every = {every}
+"#
+    );
+    let path = dir.join(format!("settling-{every}.toml"));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Adaptive steps and the rest criterion resume bit for bit: from a
+/// checkpoint in the middle of the second segment (every 150 converged
+/// steps: the controller's segment and step size come back), and from the
+/// one just before the run came to rest (every step: the nine still steps
+/// counted come back, so the run ends at rest one step later, as the
+/// uninterrupted one did).
+#[test]
+fn adaptive_run_with_rest_resumes_bit_for_bit() {
+    let dir = temp("adaptive");
+    for every in [150, 1] {
+        let sc = settling(&dir, every);
+        let out = dir.join(format!("out-{every}"));
+        let o = run(&[
+            "run",
+            sc.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+        assert!(summary.contains("\"at_rest\": true"), "{summary}");
+        let (whole, vtu) = (history(&out), final_vtu(&out));
+        let steps = whole.lines().count() - 2;
+        assert!(steps > 150 + 10, "{steps} steps");
+        let o = run(&["run", "--resume", out.to_str().unwrap(), "--quiet"]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        // Compared without printing both histories when they differ.
+        let resumed = history(&out);
+        assert!(
+            resumed == whole,
+            "checkpoints every {every}: the resumed history differs ({} rows, not {})",
+            resumed.lines().count() - 1,
+            whole.lines().count() - 1
+        );
+        assert!(
+            final_vtu(&out) == vtu,
+            "checkpoints every {every}: last frame"
+        );
+        let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+        assert!(summary.contains("\"at_rest\": true"), "{summary}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// SIGINT ends the current step, writes a checkpoint and the summary
 /// ("interrupted") and exits with 130; the run then resumes to the same
 /// result as an uninterrupted one. A changed scenario is refused.

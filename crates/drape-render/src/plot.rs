@@ -30,6 +30,9 @@ pub struct PlotReport {
     pub panels: Vec<String>,
     /// Names of the monitors plotted.
     pub monitors: Vec<String>,
+    /// The line under the title: `summary.json`'s message when the run
+    /// ended at rest (`"at_rest": true`), else `None`.
+    pub note: Option<String>,
 }
 
 const SS: u32 = 2;
@@ -107,9 +110,15 @@ pub fn plot_image(dir: &Path, width: u32, height: u32) -> Result<(RgbImage, Plot
     if time.is_empty() {
         return Err(RenderError::format(&path, "no rows to plot"));
     }
-    let title = std::fs::read_to_string(dir.join("summary.json"))
+    let summary = std::fs::read_to_string(dir.join("summary.json"))
         .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+    let note = summary
+        .as_ref()
+        .filter(|v| v.get("at_rest").and_then(serde_json::Value::as_bool) == Some(true))
+        .and_then(|v| v.get("message")?.as_str().map(str::to_owned));
+    let title = summary
+        .as_ref()
         .and_then(|v| v.get("title")?.as_str().map(str::to_owned))
         .unwrap_or_else(|| {
             dir.file_name()
@@ -227,7 +236,11 @@ pub fn plot_image(dir: &Path, width: u32, height: u32) -> Result<(RgbImage, Plot
     let titles: Vec<String> = panels.iter().map(|p| p.title.clone()).collect();
     let (bw, bh) = (width * SS, height * SS);
     let mut buf = vec![255u8; bw as usize * bh as usize * 3];
-    draw_all(&mut buf, (bw, bh), &title, &time, &panels).map_err(|message| {
+    let heading = Heading {
+        title: &title,
+        note: note.as_deref(),
+    };
+    draw_all(&mut buf, (bw, bh), &heading, &time, &panels).map_err(|message| {
         RenderError::Encode {
             path: dir.join("history.csv"),
             message,
@@ -241,6 +254,7 @@ pub fn plot_image(dir: &Path, width: u32, height: u32) -> Result<(RgbImage, Plot
         rows: time.len(),
         panels: titles,
         monitors,
+        note,
     };
     Ok((img, report))
 }
@@ -335,10 +349,16 @@ fn y_range(p: &Panel) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// What the plot's title area says: the title, and a note under it.
+struct Heading<'a> {
+    title: &'a str,
+    note: Option<&'a str>,
+}
+
 fn draw_all(
     buf: &mut [u8],
     size: (u32, u32),
-    title: &str,
+    heading: &Heading,
     time: &[f64],
     panels: &[Panel],
 ) -> std::result::Result<(), String> {
@@ -348,16 +368,26 @@ fn draw_all(
     let px = |v: f64| (v * u).round().max(1.0) as u32;
     let root = BitMapBackend::with_buffer(buf, size).into_drawing_area();
     root.fill(&WHITE).map_err(|x| e(&x))?;
-    let title_h = px(46.0);
+    let title_h = px(if heading.note.is_some() { 70.0 } else { 46.0 });
     let (top, rest) = root.split_vertically(title_h);
     top.draw(&Text::new(
-        format!("{title} — time histories"),
+        format!("{} — time histories", heading.title),
         (px(16.0) as i32, px(12.0) as i32),
         ("sans-serif", px(22.0) as f64, FontStyle::Bold)
             .into_font()
             .color(&RGBColor(20, 20, 20)),
     ))
     .map_err(|x| e(&x))?;
+    if let Some(note) = heading.note {
+        top.draw(&Text::new(
+            note.to_owned(),
+            (px(16.0) as i32, px(42.0) as i32),
+            ("sans-serif", px(15.0) as f64)
+                .into_font()
+                .color(&RGBColor(30, 110, 50)),
+        ))
+        .map_err(|x| e(&x))?;
+    }
     let areas = rest.split_evenly((3, 2));
     for (area, p) in areas.iter().zip(panels) {
         let (x_desc, x) = match &p.x {
