@@ -28,12 +28,9 @@
 //! the next step takes their lower decile (the function `persistence`).
 //! Newton's work is set by the nodes predicted worst, not by the smoothly
 //! moving majority that a single fit over all nodes follows (that fit
-//! saves 0.5 % of the pedestal's iterations, the decile 5 %). Free fall
-//! and smooth motion keep `rho = 1`. Newton iterations, constant
-//! acceleration against persistence: pedestal 1,133 / 1,077, with
-//! multipliers 1,227 / 1,129, drape tester 837 / 775, inflated disc
-//! 135 / 124, hanging cloth 904 / 900 (docs/performance.md). The converged
-//! steps are the same to the Newton tolerance.
+//! saves less than the decile: docs/performance.md, which has the
+//! figures). Free fall and smooth motion keep `rho = 1`. The converged
+//! steps are the same as with `rho = 1` to the Newton tolerance.
 
 use super::{State, StepTerms, solve_step};
 use crate::model::Model;
@@ -53,14 +50,20 @@ pub struct Newmark {
 pub struct DynamicWorkspace {
     q: Vec<f64>,
     mq: Vec<f64>,
-    dead: Vec<f64>,
+    pub(crate) dead: Vec<f64>,
     /// Internal forces at the last converged state.
     pub f_int: Vec<f64>,
     /// External forces at the last converged state.
     pub f_ext: Vec<f64>,
-    my: Vec<f64>,
+    pub(crate) my: Vec<f64>,
     /// The nodes' acceleration persistences (scratch of `persistence`).
     ratios: Vec<f64>,
+    /// The external forces at the start of the step (the work integral's
+    /// left end, restored when a step fails).
+    pub(crate) old_ext: Vec<f64>,
+    /// The step's iterate (first guess, then solution), swapped with the
+    /// state's positions when the step converges.
+    pub(crate) y: Vec<f64>,
     /// Newton buffers and the linear solver.
     pub newton: NewtonWorkspace,
 }
@@ -91,6 +94,8 @@ impl DynamicWorkspace {
             f_ext: vec![0.0; n],
             my: vec![0.0; n],
             ratios: Vec::with_capacity(n / 3),
+            old_ext: vec![0.0; n],
+            y: vec![0.0; n],
             newton: NewtonWorkspace::new(n, model.pattern.nnz(), linear),
         })
     }
@@ -150,15 +155,13 @@ impl Newmark {
         }
         model.mass_times(&ws.q, &mut ws.mq);
         model.dead_forces(t1, None, &mut ws.dead);
-        let old_ext = ws.f_ext.clone();
+        ws.old_ext.copy_from_slice(&ws.f_ext);
         let theta = 0.5 - beta + beta * state.persistence;
-        let mut y: Vec<f64> = (0..state.positions.len())
-            .map(|i| {
-                state.positions[i]
-                    + dt * state.velocities[i]
-                    + theta * dt * dt * state.accelerations[i]
-            })
-            .collect();
+        for (i, y) in ws.y.iter_mut().enumerate() {
+            *y = state.positions[i]
+                + dt * state.velocities[i]
+                + theta * dt * dt * state.accelerations[i];
+        }
         let terms = StepTerms {
             c,
             mq: &ws.mq,
@@ -170,7 +173,7 @@ impl Newmark {
             model,
             terms,
             &mut state.contact,
-            &mut y,
+            &mut ws.y,
             length,
             settings,
             &mut ws.newton,
@@ -180,10 +183,11 @@ impl Newmark {
         let (report, strain_energy) = match result {
             Ok(r) => r,
             Err(e) => {
-                ws.f_ext.copy_from_slice(&old_ext);
+                ws.f_ext.copy_from_slice(&ws.old_ext);
                 return Err(e);
             }
         };
+        let (y, old_ext) = (&ws.y, &ws.old_ext);
         let mut work = 0.0;
         for i in 0..y.len() {
             // A_{s+1} = Y/(beta dt^2) - Q_s, into `q`.
@@ -194,7 +198,7 @@ impl Newmark {
         }
         state.persistence = persistence(&state.accelerations, &ws.q, &mut ws.ratios);
         state.accelerations.copy_from_slice(&ws.q);
-        state.positions = y;
+        std::mem::swap(&mut state.positions, &mut ws.y);
         state.time = t1;
         state.external_work += work;
         Ok(StepOutcome {

@@ -37,15 +37,13 @@ impl StaticStepper {
         ws: &mut DynamicWorkspace,
     ) -> Result<StepOutcome, NewtonError> {
         let lambda = (state.time + dlambda).min(1.0 + 1e-12);
-        let mut dead = vec![0.0; model.dofs()];
-        model.dead_forces(lambda, Some(lambda), &mut dead);
-        let old_ext = ws.f_ext.clone();
-        let mut y = state.positions.clone();
-        let mut my = vec![0.0; y.len()];
+        model.dead_forces(lambda, Some(lambda), &mut ws.dead);
+        ws.old_ext.copy_from_slice(&ws.f_ext);
+        ws.y.copy_from_slice(&state.positions);
         let terms = StepTerms {
             c: 0.0,
             mq: &[],
-            dead: &dead,
+            dead: &ws.dead,
             pressure: model.pressure_at(lambda, Some(lambda)),
             time: lambda,
         };
@@ -53,25 +51,25 @@ impl StaticStepper {
             model,
             terms,
             &mut state.contact,
-            &mut y,
+            &mut ws.y,
             length,
             settings,
             &mut ws.newton,
             &mut ws.f_ext,
-            &mut my,
+            &mut ws.my,
         );
         let (report, strain_energy) = match result {
             Ok(r) => r,
             Err(e) => {
-                ws.f_ext.copy_from_slice(&old_ext);
+                ws.f_ext.copy_from_slice(&ws.old_ext);
                 return Err(e);
             }
         };
         let mut work = 0.0;
-        for i in 0..y.len() {
-            work += 0.5 * (old_ext[i] + ws.f_ext[i]) * (y[i] - state.positions[i]);
+        for i in 0..ws.y.len() {
+            work += 0.5 * (ws.old_ext[i] + ws.f_ext[i]) * (ws.y[i] - state.positions[i]);
         }
-        state.positions = y;
+        std::mem::swap(&mut state.positions, &mut ws.y);
         state.time = lambda;
         state.external_work += work;
         Ok(StepOutcome {
