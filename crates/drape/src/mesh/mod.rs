@@ -19,8 +19,10 @@
 pub mod generate;
 pub mod gmsh;
 pub mod obj;
+mod read_error;
 mod validate;
 
+pub use read_error::{Location, MeshReadError};
 pub use validate::MeshError;
 
 /// Lagrange order of the triangles of a mesh.

@@ -47,7 +47,7 @@ use std::path::Path;
 
 use super::{ElementOrder, Mesh};
 
-pub use super::gmsh::{Location, MeshReadError};
+pub use super::{Location, MeshReadError};
 
 /// Reads a Wavefront OBJ file into a linear triangle [`Mesh`].
 ///
