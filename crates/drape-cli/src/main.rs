@@ -5,6 +5,7 @@
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
+use drape::output::directory;
 use drape::scenario::{Scenario, ScenarioError, Setup};
 use drape::simulation::{self, RunControl, RunError, StepInfo};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -315,7 +316,12 @@ fn run(
             .unwrap_or_else(|| "run".into());
         PathBuf::from("out").join(stem)
     });
+    // One writer per directory, held to the end of the run; a fresh run
+    // starts from a directory of drape's own with its old outputs gone.
+    let lock = directory::lock(&out).map_err(|e| Failure::Input(e.into()))?;
     if resume.is_none() {
+        directory::clear_previous_outputs(&lock, &out, Some(path))
+            .map_err(|e| Failure::Input(e.into()))?;
         // Remember the scenario, for --resume and for readers of the outputs.
         let copy = out.join("scenario.toml");
         std::fs::create_dir_all(&out)

@@ -18,11 +18,16 @@
 //! ([`atomic`]). A frame is written before it is added to `fields.pvd`, so
 //! the collection only lists complete frames.
 //!
+//! [`directory`] makes the directory drape's own: one writer at a time
+//! (a lock), and a fresh run that clears its previous outputs and refuses
+//! anybody else's files.
+//!
 //! [`background::Background`] runs such writes on a thread of their own,
 //! in order, so that a run loop need not wait for the disk.
 
 pub mod atomic;
 pub mod background;
+pub mod directory;
 pub mod history;
 pub mod pvd;
 pub mod vtu;
