@@ -768,8 +768,47 @@ const BAD_INPUTS: &[BadInput] = &[
     },
     BadInput {
         file: "unknown_key_obstacle.toml",
-        fragments: &["`obstacle`", "unknown field `radiu`", "`radius`"],
+        fragments: &[
+            "`obstacle[0]` (shape = \"sphere\")",
+            "unknown field `radiu`",
+            "`radius`",
+        ],
         line: Some(22),
+    },
+    // A key of another shape is an unknown key of the shape given, at its
+    // own line, wherever `shape` stands in the table.
+    BadInput {
+        file: "sphere_with_box_key.toml",
+        fragments: &[
+            "`obstacle[0]` (shape = \"sphere\")",
+            "unknown field `min`",
+            "`center`, `radius`, `velocity`",
+        ],
+        line: Some(19),
+    },
+    BadInput {
+        file: "cylinder_unknown_key.toml",
+        fragments: &[
+            "`obstacle[1]` (shape = \"cylinder\")",
+            "unknown field `rim`",
+            "`edge_radius`",
+        ],
+        line: Some(29),
+    },
+    BadInput {
+        file: "obstacle_wrong_type.toml",
+        fragments: &[
+            "`obstacle[0].radius` (shape = \"sphere\")",
+            "invalid type",
+            "\"big\"",
+            "f64",
+        ],
+        line: Some(21),
+    },
+    BadInput {
+        file: "obstacle_missing_shape.toml",
+        fragments: &["`obstacle[0]`", "missing field `shape`"],
+        line: Some(18),
     },
     BadInput {
         file: "missing_required.toml",
@@ -1082,15 +1121,19 @@ const BAD_INPUTS: &[BadInput] = &[
     },
     BadInput {
         file: "unknown_material_model.toml",
-        fragments: &["`material.model`", "\"neo-hookean\""],
+        fragments: &[
+            "`material.model`",
+            "unknown variant `neo-hookean`",
+            "`saint-venant-kirchhoff`",
+        ],
         line: Some(14),
     },
     BadInput {
         file: "unknown_wrinkling.toml",
         fragments: &[
             "`material.wrinkling`",
-            "\"tension-field\"",
-            "stress-projection",
+            "unknown variant `tension-field`",
+            "`none`, `stress-projection`, `relaxed-energy`",
         ],
         line: Some(14),
     },
@@ -1187,12 +1230,19 @@ const BAD_INPUTS: &[BadInput] = &[
     },
     BadInput {
         file: "unknown_contact_method.toml",
-        fragments: &["`contact.method`", "\"friction\"", "penalty", "lagrange"],
+        fragments: &[
+            "`contact.method`",
+            "unknown variant `friction`",
+            "`penalty` or `lagrange`",
+        ],
         line: Some(24),
     },
     BadInput {
         file: "penalty_missing.toml",
-        fragments: &["`contact.penalty`", "required"],
+        fragments: &[
+            "`contact` (method = \"penalty\")",
+            "missing field `penalty`",
+        ],
         line: Some(21),
     },
     BadInput {
@@ -1203,14 +1253,18 @@ const BAD_INPUTS: &[BadInput] = &[
     BadInput {
         file: "lagrange_with_penalty.toml",
         fragments: &[
-            "`contact.penalty`",
-            "does not apply to method = \"lagrange\"",
+            "`contact` (method = \"lagrange\")",
+            "unknown field `penalty`",
         ],
         line: Some(25),
     },
     BadInput {
         file: "unknown_obstacle.toml",
-        fragments: &["`obstacle[0].shape`", "\"torus\""],
+        fragments: &[
+            "`obstacle[0].shape`",
+            "unknown variant `torus`",
+            "`plane`, `box`, `sphere`, `cylinder`, `mesh`",
+        ],
         line: Some(17),
     },
     BadInput {
@@ -1231,8 +1285,8 @@ const BAD_INPUTS: &[BadInput] = &[
     BadInput {
         file: "cylinder_missing_height.toml",
         fragments: &[
-            "`obstacle[0].height`",
-            "is required for shape = \"cylinder\"",
+            "`obstacle[0]` (shape = \"cylinder\")",
+            "missing field `height`",
         ],
         line: Some(18),
     },
@@ -1253,14 +1307,15 @@ const BAD_INPUTS: &[BadInput] = &[
     BadInput {
         file: "edge_radius_on_sphere.toml",
         fragments: &[
-            "`obstacle[0].edge_radius`",
-            "does not apply to shape = \"sphere\"",
+            "`obstacle[0]` (shape = \"sphere\")",
+            "unknown field `edge_radius`",
+            "`center`, `radius`, `velocity`",
         ],
         line: Some(22),
     },
     BadInput {
         file: "mesh_obstacle_missing_path.toml",
-        fragments: &["`obstacle[0].path`", "is required for shape = \"mesh\""],
+        fragments: &["`obstacle[0]` (shape = \"mesh\")", "missing field `path`"],
         line: Some(18),
     },
     BadInput {

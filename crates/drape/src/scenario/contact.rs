@@ -1,0 +1,138 @@
+//! `[contact]`: how contact with the obstacles is enforced, whose keys are
+//! chosen by its `method` (each method's own struct, read by
+//! [`super::tagged`]); the contact model built from it and the obstacles.
+
+use super::check::Checker;
+use super::obstacle::build_body;
+use super::{Scenario, ScenarioError};
+use crate::contact::{ContactMethod, ContactModel};
+use crate::mesh::Mesh;
+use serde::Deserialize;
+use std::path::Path;
+use toml::de::ValueDeserializer;
+
+/// The values of `[contact] method`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ContactMethodName {
+    /// A penalty potential on penetration.
+    Penalty,
+    /// Lagrange multipliers on an active set.
+    Lagrange,
+}
+
+/// `[contact]`, with the keys of its `method` (a key of another method is
+/// an unknown key).
+#[derive(Debug, Clone, PartialEq)]
+pub enum ContactSpec {
+    /// `method = "penalty"`.
+    Penalty(PenaltySpec),
+    /// `method = "lagrange"`.
+    Lagrange(LagrangeSpec),
+}
+
+/// `method = "penalty"`: the potential `1/2 eta g^2` for `g < 0`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PenaltySpec {
+    /// Penalty stiffness `eta` (N/m per node), > 0. Required.
+    pub penalty: f64,
+}
+
+/// `method = "lagrange"`: `g = 0` exactly on an active set; no keys of its own.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LagrangeSpec {}
+
+impl ContactSpec {
+    /// The keys of the contact table but `method`, into the struct of `method`.
+    pub(super) fn read(
+        method: ContactMethodName,
+        keys: ValueDeserializer<'_>,
+    ) -> Result<Self, toml::de::Error> {
+        Ok(match method {
+            ContactMethodName::Penalty => Self::Penalty(Deserialize::deserialize(keys)?),
+            ContactMethodName::Lagrange => Self::Lagrange(Deserialize::deserialize(keys)?),
+        })
+    }
+}
+
+/// The obstacles and the contact method, `None` without obstacles (and
+/// then without a `[contact]` table).
+pub(super) fn build_contact(
+    c: &Checker,
+    s: &Scenario,
+    base: &Path,
+) -> Result<Option<ContactModel>, ScenarioError> {
+    if s.obstacles.is_empty() {
+        if s.contact.is_some() {
+            return Err(c.invalid(
+                "contact",
+                None,
+                "method",
+                "is given but there is no [[obstacle]]".into(),
+            ));
+        }
+        return Ok(None);
+    }
+    let spec = c.required(
+        "contact",
+        None,
+        "method",
+        &s.contact,
+        "when there are obstacles (a [contact] table with method = \"penalty\" or \"lagrange\")",
+    )?;
+    let method = match spec {
+        ContactSpec::Penalty(p) => ContactMethod::Penalty {
+            stiffness: c.positive("contact", None, "penalty", p.penalty)?,
+        },
+        ContactSpec::Lagrange(_) => ContactMethod::Lagrange,
+    };
+    let bodies = (s.obstacles.iter().enumerate())
+        .map(|(i, o)| build_body(c, i, o, base))
+        .collect::<Result<_, _>>()?;
+    Ok(Some(ContactModel { bodies, method }))
+}
+
+/// Rejects a fabric that starts inside an obstacle by more than 1e-3 of
+/// its size: contact would fling it out in the first step (a node sitting
+/// on a surface, or a hair inside, is fine).
+pub(super) fn check_initial_penetration(
+    c: &Checker,
+    mesh: &Mesh,
+    contact: &ContactModel,
+) -> Result<(), ScenarioError> {
+    let size = super::build::diagonal(mesh);
+    // Nodes, and the centroids and edge midpoints of the elements' vertex
+    // triangles: an obstacle smaller than an element can sit between nodes.
+    let mut probes: Vec<[f64; 3]> = mesh.nodes.clone();
+    for el in mesh.elements() {
+        let v = [mesh.nodes[el[0]], mesh.nodes[el[1]], mesh.nodes[el[2]]];
+        probes.push([0, 1, 2].map(|i| (v[0][i] + v[1][i] + v[2][i]) / 3.0));
+        for j in 0..3 {
+            let (a, b) = (v[j], v[(j + 1) % 3]);
+            probes.push([0, 1, 2].map(|i| 0.5 * (a[i] + b[i])));
+        }
+    }
+    for (k, body) in contact.bodies.iter().enumerate() {
+        let deepest = probes
+            .iter()
+            .map(|x| (*x, body.proximity(*x, 0.0, None).gap))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((x, gap)) = deepest
+            && gap < -1e-3 * size
+        {
+            return Err(c.invalid(
+                "obstacle",
+                Some(k),
+                "shape",
+                format!(
+                    "({}) starts interpenetrating the fabric: the fabric's point {x:?} is {:.4e} m inside it; move the obstacle or the mesh",
+                    body.shape.describe(),
+                    -gap
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
