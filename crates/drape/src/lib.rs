@@ -7,13 +7,14 @@
 //! solved by Newton–Raphson on a sparse Hessian.
 //!
 //! Data flows one way: [`scenario`] (a TOML file) → [`model::Model`] →
-//! [`integrator`] (one time step) → [`solver`] (Newton, sparse direct
+//! [`integrator`] (one time step) → [`solver`] (Newton, sparse linear
 //! solves) → [`output`] (history, fields, summary); [`simulation`] drives
 //! the loop. See `ARCHITECTURE.md` for the map.
 #![warn(missing_docs)]
 // Kernels index arrays the way the equations do (`F[i][c]`, `phi[a]`).
 #![allow(clippy::needless_range_loop)]
 
+pub mod block3;
 pub mod contact;
 pub mod element;
 pub mod fd;
@@ -28,3 +29,4 @@ pub mod scenario;
 pub mod simulation;
 pub mod solver;
 pub mod vec3;
+pub mod vecn;

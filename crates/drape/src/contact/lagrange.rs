@@ -54,6 +54,7 @@
 use super::{ContactModel, ContactState, Proximity};
 use crate::solver::SparsePattern;
 use crate::vec3::{cross, dot, norm, scale};
+use crate::vecn;
 
 /// Most re-solutions of one step for a changing active set.
 pub const MAX_ACTIVE_SET_ROUNDS: usize = 20;
@@ -166,7 +167,7 @@ impl ContactModel {
             for a in active.iter() {
                 g[3 * a.node + 2] = a.scale * a.proximity.gap;
             }
-            return norm_of(g);
+            return vecn::norm(g);
         };
         let (ptr, rows) = pattern.node_graph();
         // Curvature of the constraint, then the scale, on the diagonal block.
@@ -219,7 +220,7 @@ impl ContactModel {
         for a in active.iter() {
             g[3 * a.node + 2] = a.scale * a.proximity.gap;
         }
-        let merit = norm_of(g);
+        let merit = vecn::norm(g);
         // Eliminate each normal unknown as the prescribed increment -gap.
         for a in active.iter() {
             let d = 3 * a.node + 2;
@@ -312,10 +313,6 @@ impl ContactModel {
         }
         changed
     }
-}
-
-fn norm_of(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 fn rotate_residual(a: &ActiveNode, g: &mut [f64]) {

@@ -28,7 +28,7 @@ pub mod penalty;
 
 pub use obstacle::{Obstacle, ObstacleError, Proximity};
 
-use crate::vec3::{add, scale, sub};
+use crate::vec3::{add, norm, scale, sub};
 use rayon::prelude::*;
 
 /// Meshes with fewer nodes search for contact on the calling thread (a
@@ -88,8 +88,7 @@ impl RigidBody {
 
     fn diagonal(&self) -> f64 {
         let (lo, hi) = self.shape.bounding_box();
-        let d = sub(hi, lo);
-        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+        norm(sub(hi, lo))
     }
 }
 

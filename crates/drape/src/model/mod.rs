@@ -392,11 +392,7 @@ impl Model {
     /// Kinetic energy `1/2 V . M V` (J). `scratch`: `dofs` long.
     pub fn kinetic_energy(&self, v: &[f64], scratch: &mut [f64]) -> f64 {
         self.mass_times(v, scratch);
-        0.5 * v
-            .iter()
-            .zip(scratch.iter())
-            .map(|(a, b)| a * b)
-            .sum::<f64>()
+        0.5 * crate::vecn::dot(v, scratch)
     }
 
     /// Adds `c M` to Hessian values on the pattern.

@@ -28,7 +28,8 @@
 //! positive definite and preconditions conjugate gradients; for the
 //! non-symmetric wrinkling tangent it preconditions GMRES.
 
-use super::block_lu::{Block, BlockLu, IDENTITY, invert, mul, mul_acc, mul_vec, transpose};
+use super::block_lu::BlockLu;
+use crate::block3::{Block, IDENTITY, invert, mul, mul_acc, mul_vec, transpose};
 use rayon::prelude::*;
 
 /// The coarsest level has at most this many nodes (factorised directly).
@@ -420,7 +421,7 @@ fn spectral_radius(a: &BlockCsr, d_inv: &[Block]) -> f64 {
             w.chunks_mut(3).zip(d_inv.iter()).map(node).sum()
         }
     };
-    let mut vnorm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let mut vnorm = crate::vecn::norm(&v);
     let mut rho = 1.0;
     for _ in 0..12 {
         a.matvec(&v, &mut w);
@@ -658,6 +659,7 @@ impl Amg {
 mod tests {
     use super::*;
     use crate::solver::pattern::SparsePattern;
+    use crate::vecn::dot;
 
     /// A mass-plus-stiffness-like SPD matrix on an `n x n` triangle grid:
     /// a graph Laplacian in each component (the stiffness, weight 1) plus
@@ -691,7 +693,6 @@ mod tests {
         let mut z = vec![0.0; n];
         amg.apply(&r, &mut z);
         let mut p = z.clone();
-        let dot = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(a, c)| a * c).sum::<f64>();
         let mut rz = dot(&r, &z);
         let b_norm = dot(&b, &b).sqrt();
         let mut ap = vec![0.0; n];
@@ -770,10 +771,6 @@ mod tests {
             }
         }
         a
-    }
-
-    fn dot(a: &[f64], b: &[f64]) -> f64 {
-        a.iter().zip(b).map(|(p, q)| p * q).sum()
     }
 
     /// Transpose, product and smoothed prolongator on a non-symmetric

@@ -43,13 +43,12 @@
 //! iteration is affordable it is faster than faer's Cholesky, whose fixed
 //! costs dominate small matrices (docs/performance.md).
 
+use super::pattern::gather_block;
+use crate::block3::{Block, invert, mul, mul_vec};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::amd;
 use std::ops::Range;
-
-/// A 3x3 block, row-major: `m[3 r + c]`.
-pub type Block = [f64; 9];
 
 /// Why a numeric factorisation stopped.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -64,101 +63,6 @@ pub enum BlockLuError {
     /// The fill-reducing ordering failed.
     #[error("the minimum degree ordering failed: {0}")]
     Ordering(String),
-}
-
-/// `a b`.
-#[inline(always)]
-pub(crate) fn mul(a: &Block, b: &Block) -> Block {
-    let mut c = [0.0; 9];
-    for r in 0..3 {
-        for k in 0..3 {
-            let s = a[3 * r + k];
-            for q in 0..3 {
-                c[3 * r + q] += s * b[3 * k + q];
-            }
-        }
-    }
-    c
-}
-
-/// `c -= a b` (`SUBTRACT`) or `c += a b`.
-#[inline(always)]
-pub(crate) fn mul_acc<const SUBTRACT: bool>(c: &mut Block, a: &Block, b: &Block) {
-    for r in 0..3 {
-        for k in 0..3 {
-            let s = if SUBTRACT {
-                -a[3 * r + k]
-            } else {
-                a[3 * r + k]
-            };
-            for q in 0..3 {
-                c[3 * r + q] += s * b[3 * k + q];
-            }
-        }
-    }
-}
-
-/// The 3x3 identity.
-pub(crate) const IDENTITY: Block = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
-
-/// `a^T`.
-#[inline(always)]
-pub(crate) fn transpose(a: &Block) -> Block {
-    [a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8]]
-}
-
-/// `a x` for the three entries of `x`.
-#[inline(always)]
-pub(crate) fn mul_vec(a: &Block, x: &[f64]) -> [f64; 3] {
-    [
-        a[0] * x[0] + a[1] * x[1] + a[2] * x[2],
-        a[3] * x[0] + a[4] * x[1] + a[5] * x[2],
-        a[6] * x[0] + a[7] * x[1] + a[8] * x[2],
-    ]
-}
-
-/// Inverse of a 3x3 block, `None` when its determinant is below `1e-13`
-/// of the cube of its largest entry (or not finite).
-pub(crate) fn invert(m: &Block) -> Option<Block> {
-    let c00 = m[4] * m[8] - m[5] * m[7];
-    let c01 = m[5] * m[6] - m[3] * m[8];
-    let c02 = m[3] * m[7] - m[4] * m[6];
-    let det = m[0] * c00 + m[1] * c01 + m[2] * c02;
-    let scale = m.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    if !det.is_finite() || det.abs() <= 1e-13 * scale * scale * scale {
-        return None;
-    }
-    let d = 1.0 / det;
-    Some([
-        c00 * d,
-        (m[2] * m[7] - m[1] * m[8]) * d,
-        (m[1] * m[5] - m[2] * m[4]) * d,
-        c01 * d,
-        (m[0] * m[8] - m[2] * m[6]) * d,
-        (m[2] * m[3] - m[0] * m[5]) * d,
-        c02 * d,
-        (m[1] * m[6] - m[0] * m[7]) * d,
-        (m[0] * m[4] - m[1] * m[3]) * d,
-    ])
-}
-
-/// The 3x3 block of scalar CSC `values` whose entry `(0, 0)` is at `base`,
-/// with its columns `stride` apart (the layout of
-/// [`super::SparsePattern`]: rows of a block are consecutive).
-#[inline(always)]
-pub(crate) fn gather_block(values: &[f64], base: usize, stride: usize) -> Block {
-    let (b, t) = (base, stride);
-    [
-        values[b],
-        values[b + t],
-        values[b + 2 * t],
-        values[b + 1],
-        values[b + 1 + t],
-        values[b + 1 + 2 * t],
-        values[b + 2],
-        values[b + 2 + t],
-        values[b + 2 + 2 * t],
-    ]
 }
 
 /// Where block `(I, J)` of the permuted matrix sits in the scalar CSC

@@ -21,7 +21,10 @@
 //! factors are written into storage that is reused from call to call.
 
 use super::amg::{Amg, BlockCsr};
-use super::block_lu::{Block, BlockLu, gather_block, invert, mul_vec};
+use super::block_lu::BlockLu;
+use super::pattern::gather_block;
+use crate::block3::{Block, invert, mul_vec};
+use crate::vecn::{distance, dot, norm};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::SupernodalThreshold;
@@ -140,15 +143,6 @@ pub enum LinearMode {
     /// factorisation but the coarsest level's; cost per solve about linear
     /// in the mesh size. Block-Jacobi CG/GMRES is the fallback.
     Iterative,
-}
-
-/// `|a - b|` (Euclidean).
-fn distance(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| (p - q) * (p - q))
-        .sum::<f64>()
-        .sqrt()
 }
 
 /// `z = D^-1 r` for the inverted 3x3 diagonal blocks `blocks` (a trailing
@@ -460,11 +454,11 @@ impl LinearSolver {
         let mut ax = std::mem::take(&mut self.krylov.ax);
         ax.resize(b.len(), 0.0);
         self.matvec(values, &x, &mut ax);
-        let b_norm = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let b_norm = norm(b);
         let mut d = std::mem::take(&mut self.krylov.r);
         d.clear();
         d.extend(b.iter().zip(&ax).map(|(p, q)| p - q));
-        let r_norm = d.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let r_norm = norm(&d);
         let mut ok = r_norm.is_finite();
         if ok && r_norm > 1e-12 * b_norm {
             // One step of iterative refinement: cheap (a solve with the
@@ -665,7 +659,7 @@ impl LinearSolver {
         };
         // A (numerically) singular matrix can factorise without error and
         // return garbage: check the solution's residual, `O(nnz)`.
-        let b_norm = rhs.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let b_norm = norm(rhs);
         // (The block LU has checked its residual already.)
         let residual = if used == Factorization::BlockLu {
             0.0
@@ -750,9 +744,9 @@ impl LinearSolver {
                 r[row_idx[k]] -= values[k] * x;
             }
         }
-        let norm = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let residual = norm(&r);
         self.krylov.r = r;
-        norm
+        residual
     }
 
     /// Factorises `values` (lower triangle read) by Cholesky into the kept
@@ -1010,7 +1004,7 @@ impl LinearSolver {
     ) -> Result<bool, LinearSolveError> {
         const RESTART: usize = 25;
         let n = self.dimension();
-        let b_norm = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let b_norm = norm(b);
         let mut x = std::mem::take(&mut self.krylov.x);
         x.clear();
         x.resize(n, 0.0);
@@ -1037,7 +1031,7 @@ impl LinearSolver {
             for i in 0..n {
                 r[i] = b[i] - ax[i];
             }
-            let beta = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let beta = norm(&r);
             if beta <= self.krylov_tolerance * b_norm {
                 converged = true;
                 break;
@@ -1064,13 +1058,13 @@ impl LinearSolver {
                 self.matvec(values, &z, w);
                 self.krylov.z = z;
                 for (j, vj) in head.iter().enumerate() {
-                    let hj = vj.iter().zip(w.iter()).map(|(a, c)| a * c).sum::<f64>();
+                    let hj = dot(vj, w);
                     h[k][j] = hj;
                     for i in 0..n {
                         w[i] -= hj * vj[i];
                     }
                 }
-                let norm_w = w.iter().map(|v| v * v).sum::<f64>().sqrt();
+                let norm_w = norm(w);
                 h[k][k + 1] = norm_w;
                 if norm_w > 0.0 {
                     for v in w.iter_mut() {
@@ -1142,7 +1136,7 @@ impl LinearSolver {
         max_iterations: usize,
     ) -> bool {
         let n = self.dimension();
-        let b_norm = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let b_norm = norm(b);
         let mut x = std::mem::take(&mut self.krylov.x);
         x.clear();
         x.resize(n, 0.0);
@@ -1154,7 +1148,6 @@ impl LinearSolver {
         ap.resize(n, 0.0);
         let mut z = std::mem::take(&mut self.krylov.symmetric_part);
         z.resize(n, 0.0);
-        let dot = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(a, c)| a * c).sum::<f64>();
         let mut converged = b_norm == 0.0;
         let mut iterations = 0;
         if !converged {
@@ -1174,7 +1167,7 @@ impl LinearSolver {
                     r[i] -= alpha * ap[i];
                 }
                 iterations += 1;
-                if dot(&r, &r).sqrt() <= tolerance * b_norm {
+                if norm(&r) <= tolerance * b_norm {
                     converged = true;
                     break;
                 }

@@ -50,6 +50,7 @@
 //! cutting the step.
 
 use super::linear::{Factorization, LinearSolveError, LinearSolver};
+use crate::vecn::{dot, norm};
 
 /// Convergence settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -209,10 +210,6 @@ fn converged(settings: &NewtonSettings, increment: f64, residual: f64, scale: f6
         || residual == 0.0
 }
 
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
 /// Runs Newton from the first guess in `y` (overwritten by the solution).
 /// `length`: the reference length `|X|` of the convergence test (m).
 pub fn solve(
@@ -299,7 +296,7 @@ pub fn solve(
         // that the residual of a non-convex potential is not).
         let energy0 = eval.energy;
         let slope = if energy0.is_some() {
-            ws.g.iter().zip(&ws.dy).map(|(g, d)| g * d).sum::<f64>()
+            dot(&ws.g, &ws.dy)
         } else {
             0.0
         };

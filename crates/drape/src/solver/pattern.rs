@@ -15,6 +15,8 @@
 //! Element blocks `(a, b)` store `p` once ([`SparsePattern::element_blocks`]),
 //! so assembly scatters straight into the CSC values ("scatter map").
 
+use crate::block3::Block;
+
 /// CSC pattern of the DOF-level Hessian plus the node graph behind it.
 #[derive(Debug, Clone)]
 pub struct SparsePattern {
@@ -272,6 +274,25 @@ pub fn colour_elements<'a>(
         colours[c].push(e);
     }
     colours
+}
+
+/// The 3x3 block of scalar CSC `values` whose entry `(0, 0)` is at `base`,
+/// with its columns `stride` apart (the layout of
+/// [`SparsePattern`]: rows of a block are consecutive).
+#[inline(always)]
+pub(crate) fn gather_block(values: &[f64], base: usize, stride: usize) -> Block {
+    let (b, t) = (base, stride);
+    [
+        values[b],
+        values[b + t],
+        values[b + 2 * t],
+        values[b + 1],
+        values[b + 1 + t],
+        values[b + 1 + 2 * t],
+        values[b + 2],
+        values[b + 2 + t],
+        values[b + 2 + 2 * t],
+    ]
 }
 
 #[cfg(test)]

@@ -10,8 +10,9 @@
 //! (the acceleration at the end of the step is `A_{s+1} = c Y - Q_s`).
 //! Its scale in Newton's test is `c |M Y| + |M Q_s|`.
 
-use super::super::potential::{Stencils, StepContext, StepTerm, TermValue, dot};
+use super::super::potential::{Stencils, StepContext, StepTerm, TermValue};
 use crate::model::Model;
+use crate::vecn::dot;
 
 /// The inertia of a dynamic step.
 pub struct InertiaTerm<'a> {

@@ -13,8 +13,9 @@
 //! reports none. The external forces of the last evaluation stay in the
 //! caller's buffer: the run's work integral needs them.
 
-use super::super::potential::{Stencils, StepContext, StepTerm, TermValue, dot, norm};
+use super::super::potential::{Stencils, StepContext, StepTerm, TermValue};
 use crate::model::Model;
+use crate::vecn::{dot, norm};
 
 /// Dead loads and follower pressure.
 pub struct LoadTerm<'a> {

@@ -10,8 +10,9 @@
 //! not the derivative of an energy: the term is then no potential (its
 //! reported value is `1/2 P : E`) and its tangent is not symmetric.
 
-use super::super::potential::{Stencils, StepContext, StepTerm, TermValue, norm};
+use super::super::potential::{Stencils, StepContext, StepTerm, TermValue};
 use crate::model::Model;
+use crate::vecn::norm;
 
 /// The strain energy of the membrane: written first into `G` and `H` (it
 /// fills every block of the pattern, so they need not be zeroed).
