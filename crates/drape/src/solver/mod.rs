@@ -1,10 +1,20 @@
 //! Sparse linear algebra and the Newton–Raphson iteration (SPEC §1.7).
+//!
+//! One file per verb: [`pattern`] lays out the Hessian; [`linear`]
+//! chooses how to solve a system and checks the solution, with the
+//! factorisations (`direct`, [`block_lu`]), the Krylov methods (`krylov`),
+//! their preconditioners (`precondition`, [`amg`]) and the products by
+//! the matrix (`product`) doing the work; [`newton`] iterates.
 
 pub mod amg;
 pub mod block_lu;
+mod direct;
+mod krylov;
 pub mod linear;
 pub mod newton;
 pub mod pattern;
+mod precondition;
+mod product;
 
 pub use linear::{Factorization, LinearMode, LinearSolveError, LinearSolver, LinearStats};
 pub use newton::{NewtonError, NewtonReport, NewtonSettings};
