@@ -1,4 +1,4 @@
-//! `drape`: run, check and list membrane simulations (SPEC §3).
+//! `drape`: run, check and list membrane simulations (the README's command line).
 //!
 //! Exit codes: 0 success, 1 a run that failed (outputs up to the failure
 //! are on disk), 2 bad input (scenario, mesh, command line).

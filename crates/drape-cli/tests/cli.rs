@@ -1,5 +1,5 @@
 //! Command-line integration tests: the built `drape` binary against the
-//! contracts of SPEC §2–4 (scenario file, command line, output files).
+//! contracts of the README: scenario file, command line, outputs (scenario file, command line, output files).
 //!
 //! Every test works in its own temporary directory (under
 //! `std::env::temp_dir()`), removed when the test passes and kept for
@@ -19,7 +19,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 /// The `drape` binary built for these tests.
 const DRAPE: &str = env!("CARGO_BIN_EXE_drape");
 
-/// The columns every history starts with (SPEC §4), before the monitors.
+/// The columns every history starts with (the README's outputs), before the monitors.
 const HISTORY_COLUMNS: &str =
     "step,time,dt,iterations,kinetic_energy,strain_energy,active_contacts,contact_force,min_gap";
 
@@ -223,7 +223,7 @@ fn read_summary(out: &Path) -> Value {
     serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}\n{text}", path.display()))
 }
 
-/// Checks the SPEC §4 keys of a summary and returns its `steps`.
+/// Checks the keys of a summary (the README's outputs) and returns its `steps`.
 fn check_summary_keys(s: &Value, monitors: &[String]) -> usize {
     for key in [
         "status",
@@ -264,7 +264,7 @@ fn check_summary_keys(s: &Value, monitors: &[String]) -> usize {
     steps
 }
 
-/// Reads `history.csv`, checks its header (SPEC §4) and that every row has
+/// Reads `history.csv`, checks its header (the README's outputs) and that every row has
 /// one number per column; returns the header and the rows.
 fn read_history(out: &Path, monitors: &[String]) -> (Vec<String>, Vec<Vec<f64>>) {
     let path = out.join("history.csv");
@@ -1022,7 +1022,7 @@ const BAD_INPUTS: &[BadInput] = &[
         fragments: &["`time.segments`", "does not apply to a static analysis"],
         line: Some(20),
     },
-    // --- adaptive steps and the rest criterion (SPEC §6.1)
+    // --- adaptive steps and the rest criterion (the README's `[time]` reference)
     BadInput {
         file: "dt_max_below_dt.toml",
         fragments: &["`time.dt_max`", "0.015", "segment 1's dt = 0.02"],
@@ -2082,7 +2082,7 @@ fn vtu_frames_of_every_example_read_back_with_meshio() {
             .expect("run python3");
         let what = format!("check_vtu.py on {name}");
         assert!(o.status.success(), "{}", describe(&what, &o));
-        // The VTK cell type matches the mesh's order (SPEC §4).
+        // The VTK cell type matches the mesh's order (the README's outputs).
         let order = mesh_order(&std::fs::read_to_string(&scenario).unwrap());
         let cell = match order {
             1 => "triangle",

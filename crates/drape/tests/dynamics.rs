@@ -203,8 +203,9 @@ every = 1000
 /// problems; for this geometrically nonlinear one the error is O(dt^2)),
 /// while `beta = 1, gamma = 1.5` dissipates it at every step (0.25 s).
 ///
-/// Why the undamped run stops at 0.2 s (SPEC §5: "over the part of the
-/// swing that stays clear of compression past stretch 1/sqrt(3)"): the
+/// Why the undamped run stops at 0.2 s (the energy is checked over the
+/// part of the swing that stays clear of compression past the stretch
+/// 1/sqrt(3), docs/theory.md §1.3): the
 /// trapezoidal rule keeps the high frequencies that the swing excites, and
 /// from about 0.2 s Newton needs 10 to 26 iterations per step and the path
 /// depends on round-off — two builds that differ only in the order in

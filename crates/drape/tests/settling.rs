@@ -1,4 +1,4 @@
-//! Settling to rest (SPEC §6.1): adaptive time steps and the rest
+//! Settling to rest (the README's `[time]` reference): adaptive time steps and the rest
 //! criterion on whole runs. The controller's own rules are unit-tested in
 //! `simulation/schedule.rs`.
 

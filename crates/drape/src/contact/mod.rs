@@ -1,5 +1,5 @@
 //! Frictionless contact of the fabric's nodes with rigid obstacles
-//! (SPEC §1.8): node-to-surface, every node a projectile, every obstacle a
+//! (docs/theory.md §1.8): node-to-surface, every node a projectile, every obstacle a
 //! target.
 //!
 //! * [`obstacle`]: the geometry — gap, normal, normal derivative of plane,

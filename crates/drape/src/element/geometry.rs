@@ -4,7 +4,7 @@
 //! At a point with initial tangents `G_k = sum_a X^a d phi^a / d xi_k`, the
 //! local orthonormal frame is `e1 = G_1 / |G_1|`, `e3 = G_1 x G_2 / |G_1 x
 //! G_2|`, `e2 = e3 x e1`; `J0[b][k] = e_b . G_k`; `dA0 = det(J0) dxi =
-//! |G_1 x G_2| dxi`; `grad phi^a = J0^{-T} d phi^a / d xi` (SPEC §1.2).
+//! |G_1 x G_2| dxi`; `grad phi^a = J0^{-T} d phi^a / d xi` (docs/theory.md §1.2).
 
 use super::lagrange::ShapeFunctions;
 use super::quadrature::QuadratureRule;

@@ -1,5 +1,5 @@
 //! The positional membrane kernel: strain energy, internal force and
-//! Hessian of one element (SPEC §1.2–1.3).
+//! Hessian of one element (docs/theory.md §1.2–1.3).
 //!
 //! Symbols (per quadrature point, weight `w = w_q det J0`):
 //!

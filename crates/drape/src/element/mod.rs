@@ -1,6 +1,6 @@
 //! The positional membrane element: shape functions, quadrature, the
 //! per-element reference geometry and the internal-force / Hessian kernel
-//! (SPEC §1.2–1.3).
+//! (docs/theory.md §1.2–1.3).
 
 pub mod geometry;
 pub mod lagrange;

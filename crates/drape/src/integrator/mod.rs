@@ -1,6 +1,6 @@
 //! Time integration: Newmark-beta in positions (dynamic) and load stepping
-//! (static), each step solved by Newton–Raphson (SPEC §1.6–1.7), with the
-//! contact active-set loop for Lagrange multipliers (SPEC §1.8).
+//! (static), each step solved by Newton–Raphson (docs/theory.md §1.6–1.7), with the
+//! contact active-set loop for Lagrange multipliers (docs/theory.md §1.8).
 
 pub mod newmark;
 pub mod potential;

@@ -1,4 +1,4 @@
-//! Newmark-beta in positions (SPEC §1.6):
+//! Newmark-beta in positions (docs/theory.md §1.6):
 //!
 //! ```text
 //! Q_s     = Y_s/(beta dt^2) + V_s/(beta dt) + (1/(2 beta) - 1) A_s

@@ -1,4 +1,4 @@
-//! External loads (SPEC §1.5): dead surface loads, gravity, follower
+//! External loads (docs/theory.md §1.5): dead surface loads, gravity, follower
 //! pressure and nodal forces, each with an optional linear ramp.
 
 pub mod pressure;

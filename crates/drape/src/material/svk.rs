@@ -1,4 +1,4 @@
-//! Saint-Venant–Kirchhoff in plane stress (SPEC §1.3).
+//! Saint-Venant–Kirchhoff in plane stress (docs/theory.md §1.3).
 
 use super::{Material, MaterialResponse};
 

@@ -1,5 +1,5 @@
 //! Tension-field wrinkling: a membrane that cannot carry compression
-//! (SPEC §1.4). Two models on top of Saint-Venant–Kirchhoff, in the Voigt
+//! (docs/theory.md §1.4). Two models on top of Saint-Venant–Kirchhoff, in the Voigt
 //! convention of [`super`].
 //!
 //! # `stress-projection`

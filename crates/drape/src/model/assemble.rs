@@ -276,7 +276,7 @@ impl Model {
 
     /// Adds the follower pressure forces for the pressure `pressure` (Pa)
     /// to `f_ext` and, if given, their derivative `-d f_p / d Y` to the
-    /// Hessian values `h` on [`Model::pattern`] (SPEC §1.5; the kernel is
+    /// Hessian values `h` on [`Model::pattern`] (docs/theory.md §1.5; the kernel is
     /// [`add_pressure_force`]). The forces are added element by element in
     /// the order of [`Model::assemble`], so `f_ext` gets the same sums.
     pub fn add_pressure(&self, y: &[f64], pressure: f64, f_ext: &mut [f64], h: Option<&mut [f64]>) {

@@ -1,4 +1,4 @@
-//! Mass matrix and consistent load weights (SPEC §1.5).
+//! Mass matrix and consistent load weights (docs/theory.md §1.5).
 
 use super::ModelError;
 use crate::element::geometry::tangents;

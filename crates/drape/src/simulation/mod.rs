@@ -1,5 +1,5 @@
 //! The run loop: steps through the schedule with cut-back, writes the
-//! history, the field frames and the summary (SPEC §3–4).
+//! history, the field frames and the summary (the README's command line and outputs).
 //!
 //! A step whose Newton iteration fails (no convergence, divergence, NaN,
 //! singular Hessian) is retried as two steps of half the size, recursively

@@ -1,4 +1,4 @@
-//! Adaptive time steps and the rest criterion (SPEC §6.1): the step-size
+//! Adaptive time steps and the rest criterion (the README's `[time]` reference): the step-size
 //! controller of `[time] adaptive = true` and the watch of `[time] rest`.
 //!
 //! Both are pure: they see times, Newton iteration counts, failures and the

@@ -1,6 +1,6 @@
 //! Geometry of the rigid obstacles: signed distance (the gap), closest
 //! point, outward normal and the normal's derivative, for node-to-surface
-//! contact (SPEC §1.8).
+//! contact (docs/theory.md §1.8).
 //!
 //! Every obstacle answers one question for a point `y` (a node of the
 //! fabric): [`Obstacle::proximity`]. The answer, a [`Proximity`], holds

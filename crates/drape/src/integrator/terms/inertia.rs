@@ -1,4 +1,4 @@
-//! Inertia in a Newmark step (SPEC §1.6): with `c = 1 / (beta dt^2)` and
+//! Inertia in a Newmark step (docs/theory.md §1.6): with `c = 1 / (beta dt^2)` and
 //! `Q_s` from the state at the start of the step,
 //!
 //! ```text

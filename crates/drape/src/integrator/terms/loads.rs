@@ -1,4 +1,4 @@
-//! External loads of a step (SPEC §1.5): the dead loads (surface,
+//! External loads of a step (docs/theory.md §1.5): the dead loads (surface,
 //! gravity, nodal forces, at their ramped values at the end of the step)
 //! and the follower pressure,
 //!

@@ -1,4 +1,4 @@
-//! The membrane's strain energy (SPEC §1.2–1.4):
+//! The membrane's strain energy (docs/theory.md §1.2–1.4):
 //!
 //! ```text
 //! U(Y)   = sum_e integral t W(E) dA0,   E = 1/2 (F^T F - I)

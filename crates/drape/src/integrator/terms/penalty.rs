@@ -1,4 +1,4 @@
-//! Penalty contact with the rigid obstacles (SPEC §1.8,
+//! Penalty contact with the rigid obstacles (docs/theory.md §1.8,
 //! [`crate::contact::penalty`]): for every node–obstacle pair with a
 //! negative gap `g_p`,
 //!
