@@ -61,7 +61,7 @@ fn equilibrium_with(
         chord_steps,
     };
     let length = reference_length(&model.initial_positions());
-    let report = StaticStepper { steps: 1 }
+    let report = StaticStepper
         .step(model, &mut state, 1.0, &settings, length, &mut ws)
         .unwrap();
     let stats = ws.newton.linear.stats;

@@ -78,7 +78,7 @@ every = 1
         let mut state = drape::integrator::State::at_rest(&s.model, start);
         let length = drape::simulation::reference_length(&x0);
         s.newton.max_iterations = 50;
-        drape::integrator::StaticStepper { steps: 1 }
+        drape::integrator::StaticStepper
             .step(&s.model, &mut state, 1.0, &s.newton, length, &mut ws)
             .unwrap();
         let err = state

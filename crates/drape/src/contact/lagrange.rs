@@ -46,10 +46,8 @@
 //! the check after convergence stays the arbiter, and the bound keeps a
 //! node from switching back and forth within one solution). A set that
 //! Newton's early iterates already show need not wait for convergence
-//! and a whole new solution. Newton iterations of the pedestal with
-//! multipliers: 1,165 with the set of the step before only, 1,067 with
-//! the predictor's admissions, 992 with the revisions too (2 and 4
-//! revisions alike, 1: 1,006).
+//! and a whole new solution (what each saves on the pedestal with
+//! multipliers: docs/performance.md).
 
 use super::{ContactModel, ContactState, Proximity};
 use crate::solver::SparsePattern;

@@ -16,12 +16,10 @@ use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
 use crate::model::Model;
 use crate::solver::newton::{NewtonError, NewtonSettings};
 
-/// Load stepping over `steps` equal increments of the load factor.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StaticStepper {
-    /// Number of load increments.
-    pub steps: usize,
-}
+/// Load stepping: each step raises the load factor by the increment it
+/// is given (the schedule's `1 / steps`) and solves for equilibrium.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StaticStepper;
 
 impl StaticStepper {
     /// Advances the load factor `state.time` by `dlambda` and solves for

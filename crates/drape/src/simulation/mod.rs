@@ -944,8 +944,8 @@ fn advance(
         Analysis::Dynamic { newmark, .. } => {
             newmark.step(&setup.model, state, h, &setup.newton, length, ws)
         }
-        Analysis::Static { steps } => {
-            StaticStepper { steps: *steps }.step(&setup.model, state, h, &setup.newton, length, ws)
+        Analysis::Static { .. } => {
+            StaticStepper.step(&setup.model, state, h, &setup.newton, length, ws)
         }
     }
 }
