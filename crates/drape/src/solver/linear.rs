@@ -261,8 +261,8 @@ impl LinearSolver {
             cholesky: Cholesky::default(),
             lu: Lu::default(),
             scratch: Scratch::default(),
-            // A second thread does not speed up faer's sparse factorisation
-            // at these sizes (FACTS.md); the threads serve assembly.
+            // A second thread did not speed up faer's sparse factorisation
+            // at these sizes when measured; the threads serve assembly.
             par: Par::Seq,
             node_graph: None,
             block_lu: None,

@@ -1,4 +1,5 @@
-//! Sparse linear algebra and the Newton–Raphson iteration (SPEC §1.7).
+//! Sparse linear algebra and the Newton–Raphson iteration (docs/theory.md
+//! §1.7).
 //!
 //! One file per verb: [`pattern`] lays out the Hessian; [`linear`]
 //! chooses how to solve a system and checks the solution, with the

@@ -1,4 +1,4 @@
-//! Newton–Raphson on `G(Y) = 0` (SPEC §1.7).
+//! Newton–Raphson on `G(Y) = 0` (docs/theory.md §1.7).
 //!
 //! Each iteration solves `H dY = -G` and sets `Y <- Y + dY`. The iteration
 //! has converged when both

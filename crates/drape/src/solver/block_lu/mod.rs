@@ -36,7 +36,8 @@
 //! every solution's residual.
 //!
 //! Why not faer's sparse LU: its partial pivoting and column ordering cost
-//! 8–10 times its Cholesky (FACTS.md); this factorisation reuses one
+//! about 8 times its Cholesky (docs/performance.md, "Where the time
+//! goes"); this factorisation reuses one
 //! symbolic analysis for symmetric and non-symmetric values alike, works
 //! on 3x3 blocks (27 multiply–adds per block update, no index arithmetic
 //! per scalar), and at the sizes where one factorisation per Newton
