@@ -55,7 +55,11 @@ fn main() {
                     }
                     Err(e) => {
                         if step >= first {
-                            println!("step {} t {:.4} dt {h:.2e} FAILED: {e}", step + 1, state.time);
+                            println!(
+                                "step {} t {:.4} dt {h:.2e} FAILED: {e}",
+                                step + 1,
+                                state.time
+                            );
                         }
                         pending.push((h / 2.0, depth + 1));
                         pending.push((h / 2.0, depth + 1));

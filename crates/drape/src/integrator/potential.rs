@@ -24,7 +24,7 @@
 //! in its own module with its formula and its finite-difference test; the
 //! terms know nothing of each other. The constraints — fixed components
 //! (Dirichlet) and contact multipliers — are applied after the sum, by the
-//! step system ([`super::StepSystem`]).
+//! step system (`StepSystem` in `integrator`).
 //!
 //! When every term is a potential, [`IncrementalPotential::evaluate`]
 //! reports `Pi`, and Newton's line search judges a step by it (Armijo on

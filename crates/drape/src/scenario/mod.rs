@@ -521,7 +521,7 @@ impl Scenario {
     /// the parsed document and read apart, each dispatched on its tag
     /// (`shape`, `method`) into the struct of that choice, whose
     /// `deny_unknown_fields` then rejects another choice's keys at their
-    /// own line (see [`tagged`]); serde reads the rest in one go.
+    /// own line (the private module `tagged`); serde reads the rest in one go.
     pub fn parse(source: &str, path: &Path) -> Result<Self, ScenarioError> {
         let parse_error = |e| parse_error(source, path, e);
         let mut document = toml::de::DeTable::parse(source).map_err(parse_error)?;

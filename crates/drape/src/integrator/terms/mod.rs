@@ -2,7 +2,7 @@
 //! one concept per file: the membrane's strain energy, inertia, the
 //! external loads, penalty contact. Each states its energy, gradient and
 //! Hessian, and its test checks them against central finite differences
-//! through the one checker, [`check_term`].
+//! through the one checker, `check_term` (a test helper).
 
 mod inertia;
 mod loads;
