@@ -83,9 +83,10 @@ pub trait StepTerm {
     /// The node stencils whose Hessian blocks this term writes.
     fn stencils(&self) -> Stencils<'_>;
 
-    /// Whether the term can overwrite `g` and `h` (rather than add into
-    /// them) when called first, with `fresh`: it then writes every entry
-    /// of both, so they need not be zeroed first.
+    /// Whether the term writes `g` and `h` rather than adding into them
+    /// (every entry of both, so they need not be zeroed first): such a
+    /// term can only be the first of a potential (the membrane, whose
+    /// assembly writes every block of the pattern).
     fn overwrites(&self) -> bool {
         false
     }
@@ -96,7 +97,7 @@ pub trait StepTerm {
     fn begin_step(&mut self, _ctx: &StepContext, _y: &[f64]) {}
 
     /// Adds the term's gradient to `g` and, if given, its Hessian to the
-    /// values `h` on the model's pattern (with `fresh`, a term that
+    /// values `h` on the model's pattern (a term that
     /// [`overwrites`](Self::overwrites) writes them instead); returns its
     /// value.
     fn add(
@@ -105,7 +106,6 @@ pub trait StepTerm {
         y: &[f64],
         g: &mut [f64],
         h: Option<&mut [f64]>,
-        fresh: bool,
     ) -> TermValue;
 
     /// The largest fraction `alpha` in `(0, 1]` of the increment `dy` that
@@ -134,8 +134,14 @@ pub struct IncrementalPotential<'a> {
 
 impl<'a> IncrementalPotential<'a> {
     /// The potential of `terms`, evaluated in this order (which fixes the
-    /// floating-point sums: results are reproducible to the bit).
+    /// floating-point sums: results are reproducible to the bit). Only the
+    /// first term may [overwrite](StepTerm::overwrites) (a programming
+    /// error otherwise: it would wipe out the terms before it).
     pub fn new(terms: Vec<Box<dyn StepTerm + 'a>>) -> Self {
+        assert!(
+            terms.iter().skip(1).all(|t| !t.overwrites()),
+            "only the first term of a potential may overwrite G and H"
+        );
         let values = vec![
             TermValue {
                 value: 0.0,
@@ -155,7 +161,7 @@ impl<'a> IncrementalPotential<'a> {
     }
 
     /// Writes `G(y)` into `g` and, if asked, `H(y)` into `h`: the first
-    /// term overwrites them if it can, otherwise they are zeroed first;
+    /// term overwrites them if it does, otherwise they are zeroed first;
     /// every later term adds.
     pub fn evaluate(
         &mut self,
@@ -174,7 +180,7 @@ impl<'a> IncrementalPotential<'a> {
         let mut scale = 0.0;
         let mut energy = Some(0.0);
         for (k, term) in self.terms.iter_mut().enumerate() {
-            let v = term.add(ctx, y, g, h.as_deref_mut(), fresh && k == 0);
+            let v = term.add(ctx, y, g, h.as_deref_mut());
             scale += v.scale;
             energy = energy.filter(|_| v.potential).map(|e| e + v.value);
             self.values[k] = v;
@@ -202,11 +208,6 @@ impl<'a> IncrementalPotential<'a> {
     /// The names of the terms, in order.
     pub fn names(&self) -> Vec<&'static str> {
         self.terms.iter().map(|t| t.name()).collect()
-    }
-
-    /// The terms' stencils, in order.
-    pub fn stencils(&self) -> Vec<Stencils<'_>> {
-        self.terms.iter().map(|t| t.stencils()).collect()
     }
 }
 
@@ -238,7 +239,6 @@ mod tests {
             y: &[f64],
             g: &mut [f64],
             h: Option<&mut [f64]>,
-            _fresh: bool,
         ) -> TermValue {
             let v = self.0.evaluate(ctx, y, g, h);
             TermValue {
@@ -283,7 +283,7 @@ mod tests {
                 contact: None,
             };
             let mut g = vec![f64::NAN; n];
-            let v = whole.add(&ctx, &y, &mut g, None, true);
+            let v = whole.add(&ctx, &y, &mut g, None);
             assert_eq!(v.potential, pressure == 0.0);
             let (eh, eg) = check_term(&mut whole, &ctx, &model.pattern, &y, 1e-7);
             assert!(eh < 1e-6, "p = {pressure}: Hessian {eh:e}");

@@ -48,7 +48,6 @@ impl StepTerm for InertiaTerm<'_> {
         y: &[f64],
         g: &mut [f64],
         h: Option<&mut [f64]>,
-        _fresh: bool,
     ) -> TermValue {
         let c = self.c;
         self.model.mass_times(y, self.my);

@@ -56,7 +56,6 @@ impl StepTerm for LoadTerm<'_> {
         y: &[f64],
         g: &mut [f64],
         h: Option<&mut [f64]>,
-        _fresh: bool,
     ) -> TermValue {
         self.f_ext.copy_from_slice(self.dead);
         self.model.add_pressure(y, self.pressure, self.f_ext, h);

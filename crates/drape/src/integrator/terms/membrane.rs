@@ -46,32 +46,15 @@ impl StepTerm for MembraneTerm<'_> {
         y: &[f64],
         g: &mut [f64],
         h: Option<&mut [f64]>,
-        fresh: bool,
     ) -> TermValue {
         let model = self.model;
-        // The assembly overwrites the forces and the Hessian: as the first
-        // term it writes straight into G and H; later, through buffers.
-        let (value, scale) = if fresh {
-            let u = model.assemble(y, g, h);
-            (u, norm(g))
-        } else {
-            let mut f = vec![0.0; g.len()];
-            let mut k = h.as_ref().map(|h| vec![0.0; h.len()]);
-            let u = model.assemble(y, &mut f, k.as_deref_mut());
-            for (gi, fi) in g.iter_mut().zip(&f) {
-                *gi += fi;
-            }
-            if let (Some(h), Some(k)) = (h, k) {
-                for (hi, ki) in h.iter_mut().zip(&k) {
-                    *hi += ki;
-                }
-            }
-            (u, norm(&f))
-        };
+        // The assembly overwrites the forces and the Hessian: the first
+        // term, it writes straight into G and H.
+        let value = model.assemble(y, g, h);
         TermValue {
             value,
             potential: model.material.is_hyperelastic(),
-            scale,
+            scale: norm(g),
         }
     }
 }
@@ -129,7 +112,7 @@ mod tests {
                 assert!(eh < 1e-6, "order {order}: Hessian {eh:e}");
                 assert!(eg < 1e-6, "order {order}: gradient {eg:e}");
                 let mut g = vec![0.0; y.len()];
-                assert_eq!(term.add(&ctx, &y, &mut g, None, true).potential, potential);
+                assert_eq!(term.add(&ctx, &y, &mut g, None).potential, potential);
             }
         }
     }

@@ -85,12 +85,10 @@ mod check {
         let n = y.len();
         let mut g = vec![0.0; n];
         let mut h = vec![f64::NAN; pattern.nnz()];
-        if term.overwrites() {
-            term.add(ctx, y, &mut g, Some(&mut h), true);
-        } else {
+        if !term.overwrites() {
             h.fill(0.0);
-            term.add(ctx, y, &mut g, Some(&mut h), false);
         }
+        term.add(ctx, y, &mut g, Some(&mut h));
         let mut dense = vec![0.0; n * n];
         for col in 0..n {
             for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
@@ -103,8 +101,7 @@ mod check {
     /// The gradient (residual contribution) of `term` at `y`.
     fn gradient(term: &mut dyn StepTerm, ctx: &StepContext, y: &[f64]) -> (Vec<f64>, f64) {
         let mut g = vec![0.0; y.len()];
-        let fresh = term.overwrites();
-        let v = term.add(ctx, y, &mut g, None, fresh);
+        let v = term.add(ctx, y, &mut g, None);
         (g, v.value)
     }
 
@@ -130,9 +127,7 @@ mod check {
         );
         let (_, v0) = {
             let mut g = vec![0.0; y.len()];
-            let mut t = term.borrow_mut();
-            let fresh = t.overwrites();
-            let v = t.add(ctx, y, &mut g, None, fresh);
+            let v = term.borrow_mut().add(ctx, y, &mut g, None);
             (g, v)
         };
         let gradient_err = if v0.potential {

@@ -48,7 +48,6 @@ impl StepTerm for PenaltyTerm<'_> {
         y: &[f64],
         g: &mut [f64],
         h: Option<&mut [f64]>,
-        _fresh: bool,
     ) -> TermValue {
         let value = match ctx.contact {
             Some(state) => self.contact.add_penalty(
@@ -119,7 +118,7 @@ segments = [{ steps = 1, dt = 1e-3 }]
         };
         let mut term = PenaltyTerm::new(contact, &model.pattern, 5.0e4);
         let mut g = vec![0.0; y.len()];
-        assert!(term.add(&ctx, &y, &mut g, None, false).value > 0.0);
+        assert!(term.add(&ctx, &y, &mut g, None).value > 0.0);
         let (eh, eg) = check_term(&mut term, &ctx, &model.pattern, &y, 1e-7);
         assert!(eh < 1e-6, "Hessian {eh:e}");
         assert!(eg < 1e-6, "gradient {eg:e}");
