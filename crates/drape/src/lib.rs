@@ -14,6 +14,7 @@
 // Kernels index arrays the way the equations do (`F[i][c]`, `phi[a]`).
 #![allow(clippy::needless_range_loop)]
 
+pub mod bending;
 pub mod block3;
 pub mod contact;
 pub mod element;

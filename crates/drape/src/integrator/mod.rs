@@ -17,7 +17,7 @@ use crate::solver::newton::{
     self, Evaluation, NewtonError, NewtonReport, NewtonSettings, NewtonSystem, NewtonWorkspace,
 };
 use potential::{IncrementalPotential, StepContext, StepTerm};
-use terms::{InertiaTerm, LoadTerm, MembraneTerm, PenaltyTerm};
+use terms::{BendingTerm, InertiaTerm, LoadTerm, MembraneTerm, PenaltyTerm};
 
 /// The state carried from step to step.
 #[derive(Debug, Clone, PartialEq)]
@@ -162,7 +162,7 @@ pub(crate) struct StepTerms<'a> {
 }
 
 /// The terms of a step's incremental potential, in their order: membrane,
-/// loads, inertia (dynamic), penalty contact (with obstacles and
+/// bending (with a bending stiffness), loads, inertia (dynamic), penalty contact (with obstacles and
 /// penalties). `f_ext` receives the external forces, `my` is scratch.
 fn step_potential<'a>(
     model: &'a Model,
@@ -170,10 +170,16 @@ fn step_potential<'a>(
     f_ext: &'a mut [f64],
     my: &'a mut [f64],
 ) -> IncrementalPotential<'a> {
-    let mut list: Vec<Box<dyn StepTerm + 'a>> = vec![
-        Box::new(MembraneTerm::new(model)),
-        Box::new(LoadTerm::new(model, terms.dead, terms.pressure, f_ext)),
-    ];
+    let mut list: Vec<Box<dyn StepTerm + 'a>> = vec![Box::new(MembraneTerm::new(model))];
+    if let Some(bending) = &model.bending {
+        list.push(Box::new(BendingTerm::new(bending, &model.pattern)));
+    }
+    list.push(Box::new(LoadTerm::new(
+        model,
+        terms.dead,
+        terms.pressure,
+        f_ext,
+    )));
     if terms.c != 0.0 {
         list.push(Box::new(InertiaTerm::new(model, terms.c, terms.mq, my)));
     }

@@ -13,6 +13,7 @@ mod mass;
 
 pub use mass::MassKind;
 
+use crate::bending::{Bending, BendingRigidity};
 use crate::element::ElementGeometry;
 use crate::element::membrane::Section;
 use crate::element::quadrature::QuadratureRule;
@@ -73,6 +74,72 @@ pub struct Model {
     pressure_quadrature: PressureQuadrature,
     /// Rigid obstacles and contact enforcement, if any.
     pub contact: Option<crate::contact::ContactModel>,
+    /// Bending stiffness, if any ([`Model::with_bending`]).
+    pub bending: Option<Bending>,
+}
+
+/// Where the Hessian's entries are and which element blocks write first:
+/// everything that depends on the pattern.
+struct Layout {
+    pattern: SparsePattern,
+    element_blocks: Vec<usize>,
+    element_block_first: Vec<bool>,
+    untouched_blocks: Vec<(usize, usize)>,
+}
+
+impl Layout {
+    /// The layout of `mesh`'s elements assembled in the order of `colours`
+    /// and `halves`, on a pattern that also holds `bending`'s stencils.
+    fn new(
+        mesh: &Mesh,
+        colours: &[Vec<usize>],
+        halves: Option<&Halves>,
+        bending: Option<&Bending>,
+    ) -> Self {
+        let pattern = match bending {
+            None => SparsePattern::new(mesh.node_count(), mesh.elements()),
+            Some(b) => SparsePattern::new(mesh.node_count(), mesh.elements().chain(b.stencils())),
+        };
+        let positions = pattern.element_blocks(mesh.elements());
+        let element_blocks: Vec<usize> = {
+            let n = mesh.order.nodes_per_element();
+            mesh.elements()
+                .zip(positions.chunks(n * n))
+                .flat_map(|(el, p)| (0..n * n).map(move |ab| (p[ab], el[ab % n])))
+                .map(|(p, b)| pattern.block_layout(p, b).0)
+                .collect()
+        };
+        let (element_block_first, untouched_blocks) = {
+            let n2 = mesh.order.nodes_per_element().pow(2);
+            let mut first = vec![false; element_blocks.len()];
+            // Blocks by node-graph position.
+            let (ptr, _) = pattern.node_graph();
+            let mut touched = vec![false; ptr[mesh.node_count()]];
+            // The assembly's order (see `Model::assemble`).
+            let order: Vec<usize> = match halves {
+                Some(h) => h.order().collect(),
+                None => colours.iter().flatten().copied().collect(),
+            };
+            for e in order {
+                for k in n2 * e..n2 * (e + 1) {
+                    first[k] = !touched[positions[k]];
+                    touched[positions[k]] = true;
+                }
+            }
+            let untouched = (0..mesh.node_count())
+                .flat_map(|b| (ptr[b]..ptr[b + 1]).map(move |p| (p, b)))
+                .filter(|&(p, _)| !touched[p])
+                .map(|(p, b)| pattern.block_layout(p, b))
+                .collect();
+            (first, untouched)
+        };
+        Self {
+            pattern,
+            element_blocks,
+            element_block_first,
+            untouched_blocks,
+        }
+    }
 }
 
 /// Why a model cannot be built.
@@ -82,6 +149,9 @@ pub enum ModelError {
     /// The mesh is unusable.
     #[error(transparent)]
     Mesh(#[from] crate::mesh::MeshError),
+    /// Bending cannot be set up on the mesh.
+    #[error(transparent)]
+    Bending(#[from] crate::bending::BendingError),
     /// A lumped mass came out non-positive at a node.
     #[error("the lumped mass of node {node} is {mass:e} kg (not positive)")]
     NonPositiveMass {
@@ -202,43 +272,15 @@ impl Model {
         mesh.validate()?;
         let p = mesh.order.degree();
         let geometry = ElementGeometry::new(&mesh, &QuadratureRule::of_degree(4 * (p - 1)));
-        let pattern = SparsePattern::new(mesh.node_count(), mesh.elements());
-        let positions = pattern.element_blocks(mesh.elements());
-        let element_blocks: Vec<usize> = {
-            let n = mesh.order.nodes_per_element();
-            mesh.elements()
-                .zip(positions.chunks(n * n))
-                .flat_map(|(el, p)| (0..n * n).map(move |ab| (p[ab], el[ab % n])))
-                .map(|(p, b)| pattern.block_layout(p, b).0)
-                .collect()
-        };
         let colours = colour_elements(mesh.node_count(), mesh.elements());
         let halves = (mesh.element_count() < PARALLEL_ABOVE).then(|| Halves::new(&mesh, &colours));
-        let (element_block_first, untouched_blocks) = {
-            let n2 = mesh.order.nodes_per_element().pow(2);
-            let mut first = vec![false; element_blocks.len()];
-            // Blocks by node-graph position.
-            let (ptr, _) = pattern.node_graph();
-            let mut touched = vec![false; ptr[mesh.node_count()]];
-            // The assembly's order (see `Model::assemble`).
-            let order: Vec<usize> = match &halves {
-                Some(h) => h.order().collect(),
-                None => colours.iter().flatten().copied().collect(),
-            };
-            for e in order {
-                for k in n2 * e..n2 * (e + 1) {
-                    first[k] = !touched[positions[k]];
-                    touched[positions[k]] = true;
-                }
-            }
-            let untouched = (0..mesh.node_count())
-                .flat_map(|b| (ptr[b]..ptr[b + 1]).map(move |p| (p, b)))
-                .filter(|&(p, _)| !touched[p])
-                .map(|(p, b)| pattern.block_layout(p, b))
-                .collect();
-            (first, untouched)
-        };
-        let mass = mass::assemble_mass(&mesh, &pattern, density * section.thickness, mass_kind)?;
+        let layout = Layout::new(&mesh, &colours, halves.as_ref(), None);
+        let mass = mass::assemble_mass(
+            &mesh,
+            &layout.pattern,
+            density * section.thickness,
+            mass_kind,
+        )?;
         let area_weights = mass::area_weights(&mesh);
         let pressure_quadrature = PressureQuadrature::new(mesh.order);
         let mut fixed = fixed;
@@ -252,17 +294,45 @@ impl Model {
             loads,
             fixed,
             mass_kind,
-            pattern,
-            element_blocks,
-            element_block_first,
-            untouched_blocks,
+            pattern: layout.pattern,
+            element_blocks: layout.element_blocks,
+            element_block_first: layout.element_block_first,
+            untouched_blocks: layout.untouched_blocks,
             colours,
             halves,
             mass,
             area_weights,
             pressure_quadrature,
             contact: None,
+            bending: None,
         })
+    }
+
+    /// Adds bending stiffness of `rigidity` (docs/theory.md §1.10): its
+    /// patches are fitted on the reference mesh and their stencils join the
+    /// Hessian's pattern (which grows by the couplings between a triangle's
+    /// nodes and the nodes opposite its edges).
+    pub fn with_bending(mut self, rigidity: BendingRigidity) -> Result<Self, ModelError> {
+        let mut bending = Bending::new(&self.mesh, rigidity)?;
+        let layout = Layout::new(
+            &self.mesh,
+            &self.colours,
+            self.halves.as_ref(),
+            Some(&bending),
+        );
+        bending.attach(&layout.pattern);
+        self.mass = mass::assemble_mass(
+            &self.mesh,
+            &layout.pattern,
+            self.density * self.section.thickness,
+            self.mass_kind,
+        )?;
+        self.pattern = layout.pattern;
+        self.element_blocks = layout.element_blocks;
+        self.element_block_first = layout.element_block_first;
+        self.untouched_blocks = layout.untouched_blocks;
+        self.bending = Some(bending);
+        Ok(self)
     }
 
     /// Whether loops over elements and nodes go to rayon's pool. Below

@@ -7,6 +7,7 @@ use super::{
     MeshSpec, MonitorSpec, Scenario, ScenarioError, SegmentSpec, SolverSpec, TimeSpec,
     WrinklingSpec,
 };
+use crate::bending::BendingRigidity;
 use crate::element::membrane::Section;
 use crate::integrator::Newmark;
 use crate::load::{Load, LoadKind};
@@ -104,6 +105,7 @@ impl Scenario {
         let is_static = self.analysis.kind == AnalysisKind::Static;
         let mesh = build_mesh(&c, &self.mesh, &base)?;
         let (material, section, density) = build_material(&c, &self.material, is_static)?;
+        let bending = build_bending(&c, &self.material)?;
         let loads = (self.loads.iter().enumerate())
             .map(|(i, l)| build_load(&c, &mesh, i, l))
             .collect::<Result<Vec<_>, _>>()?;
@@ -132,6 +134,16 @@ impl Scenario {
             file: file.to_path_buf(),
             message: e.to_string(),
         })?;
+        if let Some(rigidity) = bending {
+            model = model.with_bending(rigidity).map_err(|e| {
+                c.invalid(
+                    "material",
+                    None,
+                    "bending_rigidity",
+                    format!("cannot be set up on this mesh: {e}"),
+                )
+            })?;
+        }
         if let Some(contact) = &contact {
             check_initial_penetration(&c, &model.mesh, contact)?;
         }
@@ -225,6 +237,115 @@ fn build_material(
         prestress,
     };
     Ok((material, section, density))
+}
+
+/// `[material] bending_rigidity` and `warp_direction` (SPEC §6.2): `None`
+/// for no bending (the default, or a rigidity of 0).
+fn build_bending(c: &Checker, m: &MaterialSpec) -> Result<Option<BendingRigidity>, ScenarioError> {
+    let t = "material";
+    let key = "bending_rigidity";
+    let rigidity = |v: &toml::Value, name: &str| -> Result<f64, ScenarioError> {
+        let b = match v {
+            toml::Value::Float(f) => *f,
+            toml::Value::Integer(i) => *i as f64,
+            other => {
+                return Err(c.invalid_in(
+                    t,
+                    key,
+                    name,
+                    format!("must be a number (N m), not {other}"),
+                ));
+            }
+        };
+        if b.is_finite() && b >= 0.0 {
+            Ok(b)
+        } else {
+            Err(c.invalid_in(
+                t,
+                key,
+                name,
+                format!("must be a finite number >= 0 (N m), not {b}"),
+            ))
+        }
+    };
+    let direction = match m.warp_direction {
+        None => [1.0, 0.0, 0.0],
+        Some(d) => {
+            c.finite(t, None, "warp_direction", &d)?;
+            if d == [0.0; 3] {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    "warp_direction",
+                    "must not be the zero vector".into(),
+                ));
+            }
+            d
+        }
+    };
+    let value = match &m.bending_rigidity {
+        None => None,
+        Some(toml::Value::String(s)) if s == "plate" => {
+            let d =
+                m.youngs_modulus * m.thickness.powi(3) / (12.0 * (1.0 - m.poisson_ratio.powi(2)));
+            Some(BendingRigidity::Plate {
+                rigidity: d,
+                poisson_ratio: m.poisson_ratio,
+            })
+        }
+        Some(toml::Value::String(s)) => {
+            return Err(c.invalid(
+                t,
+                None,
+                key,
+                format!(
+                    "must be a number (N m), a table {{ warp, weft }} or \"plate\", not \"{s}\""
+                ),
+            ));
+        }
+        Some(toml::Value::Table(table)) => {
+            if let Some(k) = table
+                .keys()
+                .find(|k| !matches!(k.as_str(), "warp" | "weft"))
+            {
+                return Err(c.invalid_in(
+                    t,
+                    key,
+                    k,
+                    "is not a key of bending_rigidity (expected warp and weft, N m)".into(),
+                ));
+            }
+            let get = |name: &str| match table.get(name) {
+                Some(v) => rigidity(v, name),
+                None => Err(c.invalid_in(
+                    t,
+                    key,
+                    name,
+                    "is required in a woven fabric's { warp, weft } bending rigidity".into(),
+                )),
+            };
+            let (warp, weft) = (get("warp")?, get("weft")?);
+            (warp > 0.0 || weft > 0.0).then_some(BendingRigidity::Woven {
+                warp,
+                weft,
+                direction,
+            })
+        }
+        Some(v) => {
+            let b = rigidity(v, "")
+                .map_err(|_| c.invalid(t, None, key, format!("must be a finite number >= 0 (N m), a table {{ warp, weft }} or \"plate\", not {v}")))?;
+            (b > 0.0).then_some(BendingRigidity::Isotropic(b))
+        }
+    };
+    if m.warp_direction.is_some() && !matches!(value, Some(BendingRigidity::Woven { .. })) {
+        return Err(c.invalid(
+            t,
+            None,
+            "warp_direction",
+            "applies only to a woven fabric's bending_rigidity = { warp, weft }".into(),
+        ));
+    }
+    Ok(value)
 }
 
 /// `[analysis]` and `[time]`: how time (or load) advances, with the

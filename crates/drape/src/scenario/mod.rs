@@ -181,6 +181,16 @@ pub struct MaterialSpec {
     /// with `"relaxed-energy"`.
     #[serde(default)]
     pub prestress: f64,
+    /// Bending rigidity (SPEC §6.2): a number `B` (N m, >= 0), a table
+    /// `{ warp, weft }` (N m each) or `"plate"`; default 0, a pure
+    /// membrane. Read by hand for messages naming the inner key.
+    #[serde(default)]
+    pub bending_rigidity: Option<toml::Value>,
+    /// The warp direction in the initial configuration (projected on each
+    /// element's plane), default `[1, 0, 0]`: the axes of a woven
+    /// `bending_rigidity`.
+    #[serde(default)]
+    pub warp_direction: Option<[f64; 3]>,
 }
 
 /// The values of `[material] model`.

@@ -11,6 +11,8 @@
 //!   of the force terms that make up `G` (internal, external, inertial),
 //!   so the test is relative to the forces at play.
 //!
+//! An increment at the round-off of the positions (`|dY| / L <= 4
+//! eps`) also ends the iteration: nothing is left to gain.
 //! A first guess whose residual is already at round-off (`|G| <= 1e-13
 //! scale`, e.g. free fall from the Newmark predictor) is accepted with no
 //! iteration. Each Newton increment is applied in full when it reduces
@@ -201,6 +203,12 @@ impl NewtonWorkspace {
     }
 }
 
+/// An increment `|dY| / L` at the round-off of the positions: Newton
+/// cannot move them any more, so the iterate is the solution (a problem
+/// with no load, whose residual is the round-off of forces that are all
+/// zero, has no force scale to judge it by).
+const STALLED: f64 = 4.0 * f64::EPSILON;
+
 /// The convergence test of the module docs: the last increment applied
 /// (`INFINITY` before the first) and the residual both small, or the
 /// residual at round-off.
@@ -208,6 +216,7 @@ fn converged(settings: &NewtonSettings, increment: f64, residual: f64, scale: f6
     (increment <= settings.tolerance && residual <= settings.residual_tolerance * scale)
         || residual <= 1e-13 * scale
         || residual == 0.0
+        || increment <= STALLED
 }
 
 /// Runs Newton from the first guess in `y` (overwritten by the solution).

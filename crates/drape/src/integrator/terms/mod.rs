@@ -4,11 +4,13 @@
 //! Hessian, and its test checks them against central finite differences
 //! through the one checker, `check_term` (a test helper).
 
+mod bending;
 mod inertia;
 mod loads;
 mod membrane;
 mod penalty;
 
+pub use bending::BendingTerm;
 pub use inertia::InertiaTerm;
 pub use loads::LoadTerm;
 pub use membrane::MembraneTerm;

@@ -1,0 +1,368 @@
+//! Bending stiffness, rotation-free: the unknowns stay the nodal positions.
+//!
+//! Each triangle of the mesh (each sub-triangle of a curved T6 or T10
+//! element, [`triangulate`]) carries a constant curvature `kappa` (Voigt:
+//! `kappa_11, kappa_22, 2 kappa_12`, in 1/m) measured on the quadratic
+//! surface through its patch — its own three nodes and the three nodes
+//! opposite its edges ([`patch`], after Oñate & Zárate 2000 and Flores &
+//! Oñate 2005) — along the normal of its plane:
+//!
+//! ```text
+//! kappa_ab = n . x_,ab            (the second fundamental form)
+//! W_bend   = sum_T 1/2 A_T (kappa - kappa_0) . D (kappa - kappa_0)
+//! ```
+//!
+//! `A_T` is the reference area and `kappa_0` the curvature of the initial
+//! mesh: a curved mesh is unbent, and stays at rest under no load. `D` is
+//! the bending stiffness (N m), in the frame of the fabric's warp:
+//!
+//! ```text
+//! scalar B:           D = B [1 0 0; 0 1 0; 0 0 1/2]
+//! { warp, weft }:     D = [B_w 0 0; 0 B_f 0; 0 0 sqrt(B_w B_f)/2]
+//! "plate":            D = E t^3 / (12 (1 - nu^2)) [1 nu 0; nu 1 0; 0 0 (1 - nu)/2]
+//! ```
+//!
+//! A fabric's bending rigidity `B` is what a cantilever strip measures
+//! (Peirce 1930; ASTM D1388), so a scalar `B` bends every strip with `B`:
+//! no Poisson coupling between the two curvatures. The twist rigidity of a
+//! woven fabric is Huber's geometric mean (Huber 1923: `D_12 + 2 D_66 =
+//! sqrt(D_11 D_22)` with `D_12 = 0`). Edges without a neighbour rotate
+//! freely (the moment normal to them vanishes): a free edge, or a simply
+//! supported one where its nodes are held; an edge is clamped by holding
+//! two rows of nodes.
+//!
+//! The energy, gradient and Hessian of a patch are in [`kernel`], each
+//! checked against finite differences in its tests.
+
+pub mod kernel;
+pub mod patch;
+
+use crate::mesh::{ElementOrder, Mesh};
+use crate::solver::SparsePattern;
+use patch::{Patch, PatchError};
+
+/// The bending stiffness of the fabric (SPEC §6.2 `bending_rigidity`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BendingRigidity {
+    /// The same rigidity `B` (N m) for every direction, without Poisson
+    /// coupling.
+    Isotropic(f64),
+    /// A woven fabric: `warp` for curvature along the warp (bending about
+    /// the weft), `weft` for curvature along the weft (N m), with the warp
+    /// along `direction` projected on each triangle.
+    Woven {
+        /// Rigidity for curvature along the warp (N m).
+        warp: f64,
+        /// Rigidity for curvature along the weft (N m).
+        weft: f64,
+        /// The warp direction in the initial configuration.
+        direction: [f64; 3],
+    },
+    /// A plate of rigidity `D` (N m) and Poisson ratio `nu`: `E t^3 / (12
+    /// (1 - nu^2))`.
+    Plate {
+        /// `D` (N m).
+        rigidity: f64,
+        /// Poisson's ratio.
+        poisson_ratio: f64,
+    },
+}
+
+impl BendingRigidity {
+    /// The constitutive matrix `D` (Voigt, N m) in the warp's frame.
+    pub fn matrix(&self) -> [[f64; 3]; 3] {
+        match *self {
+            Self::Isotropic(b) => [[b, 0.0, 0.0], [0.0, b, 0.0], [0.0, 0.0, 0.5 * b]],
+            Self::Woven { warp, weft, .. } => [
+                [warp, 0.0, 0.0],
+                [0.0, weft, 0.0],
+                [0.0, 0.0, 0.5 * (warp * weft).sqrt()],
+            ],
+            Self::Plate {
+                rigidity: d,
+                poisson_ratio: nu,
+            } => [
+                [d, nu * d, 0.0],
+                [nu * d, d, 0.0],
+                [0.0, 0.0, 0.5 * (1.0 - nu) * d],
+            ],
+        }
+    }
+
+    /// The frame's first axis: the warp of a woven fabric, none (any) for
+    /// an isotropic one.
+    fn axis(&self) -> Option<[f64; 3]> {
+        match *self {
+            Self::Woven { direction, .. } => Some(direction),
+            _ => None,
+        }
+    }
+}
+
+/// Why bending cannot be set up on a mesh.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum BendingError {
+    /// An edge is shared by more than two triangles.
+    #[error(
+        "bending needs a manifold mesh: the edge between nodes {} and {} is shared by elements {} (a bending patch has at most one neighbour across each edge)",
+        .nodes.0, .nodes.1, list(.elements)
+    )]
+    NonManifold {
+        /// The edge's nodes (0-based).
+        nodes: (usize, usize),
+        /// The elements sharing it (0-based).
+        elements: Vec<usize>,
+    },
+    /// A patch cannot be fitted.
+    #[error("bending patch of element {element}: {reason}")]
+    Patch {
+        /// The element (0-based).
+        element: usize,
+        /// What is wrong with it.
+        reason: String,
+    },
+}
+
+fn list(v: &[usize]) -> String {
+    v.iter()
+        .map(usize::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The sub-triangles on which bending is measured: the elements of a
+/// linear mesh; each T6 cut into 4 and each T10 into 9 along its nodes
+/// (straight or curved). Returns the triangles and, for each, its element.
+pub fn triangulate(mesh: &Mesh) -> (Vec<[usize; 3]>, Vec<usize>) {
+    let p = mesh.order.degree();
+    // Lattice node (b, c) (barycentric (p - b - c, b, c) times p) of an
+    // element: vertices 0–2, then p - 1 nodes per edge 0-1, 1-2, 2-0 (from
+    // its first vertex), then the interior node (order 3).
+    let lattice = |el: &[usize], b: usize, c: usize| -> usize {
+        let a = p - b - c;
+        match (a, b, c) {
+            (_, 0, 0) => el[0],
+            (0, _, 0) => el[1],
+            (0, 0, _) => el[2],
+            (_, _, 0) => el[3 + (b - 1)],
+            (0, _, _) => el[3 + (p - 1) + (c - 1)],
+            (_, 0, _) => el[3 + 2 * (p - 1) + (a - 1)],
+            _ => el[3 * p],
+        }
+    };
+    let mut triangles = Vec::with_capacity(mesh.element_count() * p * p);
+    let mut owner = Vec::with_capacity(mesh.element_count() * p * p);
+    for (e, el) in mesh.elements().enumerate() {
+        for b in 0..p {
+            for c in 0..p - b {
+                triangles.push([
+                    lattice(el, b, c),
+                    lattice(el, b + 1, c),
+                    lattice(el, b, c + 1),
+                ]);
+                owner.push(e);
+                if b + c + 2 <= p {
+                    triangles.push([
+                        lattice(el, b + 1, c),
+                        lattice(el, b + 1, c + 1),
+                        lattice(el, b, c + 1),
+                    ]);
+                    owner.push(e);
+                }
+            }
+        }
+    }
+    (triangles, owner)
+}
+
+/// The bending term of a mesh: one patch per (sub-)triangle, with where
+/// its Hessian blocks lie in the pattern.
+#[derive(Debug, Clone)]
+pub struct Bending {
+    /// The constitutive law it was built with.
+    pub rigidity: BendingRigidity,
+    patches: Vec<Patch>,
+    /// Stencils (the patches' nodes) in CSR form.
+    ptr: Vec<usize>,
+    nodes: Vec<usize>,
+    /// Per patch, its `len^2` Hessian block bases
+    /// ([`SparsePattern::block_layout`]), row-major in (k, l), set by
+    /// [`Bending::attach`].
+    blocks: Vec<usize>,
+}
+
+impl Bending {
+    /// The patches of `mesh` for `rigidity`, fitted on the mesh's
+    /// (reference) positions.
+    pub fn new(mesh: &Mesh, rigidity: BendingRigidity) -> Result<Self, BendingError> {
+        let (triangles, owner) = triangulate(mesh);
+        let mut edges: std::collections::HashMap<(usize, usize), Vec<(usize, usize)>> =
+            std::collections::HashMap::with_capacity(3 * triangles.len() / 2 + 1);
+        for (t, tri) in triangles.iter().enumerate() {
+            for m in 0..3 {
+                let (a, b) = (tri[(m + 1) % 3], tri[(m + 2) % 3]);
+                edges.entry((a.min(b), a.max(b))).or_default().push((t, m));
+            }
+        }
+        let mut opposite = vec![[None; 3]; triangles.len()];
+        for (key, list) in &edges {
+            match list.as_slice() {
+                [_] => {}
+                &[(t, m), (s, k)] => {
+                    opposite[t][m] = Some(triangles[s][k]);
+                    opposite[s][k] = Some(triangles[t][m]);
+                }
+                _ => {
+                    let mut elements: Vec<usize> = list.iter().map(|&(t, _)| owner[t]).collect();
+                    elements.sort_unstable();
+                    elements.dedup();
+                    return Err(BendingError::NonManifold {
+                        nodes: *key,
+                        elements,
+                    });
+                }
+            }
+        }
+        let d = rigidity.matrix();
+        let axis = rigidity.axis();
+        let mut patches = Vec::with_capacity(triangles.len());
+        for (t, tri) in triangles.iter().enumerate() {
+            if opposite[t].iter().all(Option::is_none) {
+                continue; // a lone triangle cannot bend
+            }
+            let patch = Patch::fit(*tri, opposite[t], &mesh.nodes, &d, axis).map_err(|e| {
+                BendingError::Patch {
+                    element: owner[t],
+                    reason: match e {
+                        PatchError::Degenerate => "the triangle has no area".into(),
+                        PatchError::Frame => format!(
+                            "the warp direction {:?} is normal to the element, so it gives no axis in its plane",
+                            axis.unwrap_or_default()
+                        ),
+                        PatchError::Conic => "its six nodes lie on a conic, so no quadratic surface passes through them uniquely; remesh this region".into(),
+                    },
+                }
+            })?;
+            patches.push(patch);
+        }
+        let mut ptr = Vec::with_capacity(patches.len() + 1);
+        let mut nodes = Vec::new();
+        ptr.push(0);
+        for p in &patches {
+            nodes.extend_from_slice(p.nodes());
+            ptr.push(nodes.len());
+        }
+        Ok(Self {
+            rigidity,
+            patches,
+            ptr,
+            nodes,
+            blocks: Vec::new(),
+        })
+    }
+
+    /// The patches' node lists, for the pattern and the colouring.
+    pub fn stencils(&self) -> impl Iterator<Item = &[usize]> + Clone {
+        self.ptr.windows(2).map(|w| &self.nodes[w[0]..w[1]])
+    }
+
+    /// The stencils in CSR form `(ptr, nodes)`.
+    pub fn stencil_lists(&self) -> (&[usize], &[usize]) {
+        (&self.ptr, &self.nodes)
+    }
+
+    /// The patches.
+    pub fn patches(&self) -> &[Patch] {
+        &self.patches
+    }
+
+    /// Records where each patch's Hessian blocks lie in `pattern` (which
+    /// must include the stencils).
+    pub fn attach(&mut self, pattern: &SparsePattern) {
+        self.blocks.clear();
+        for p in &self.patches {
+            for &a in p.nodes() {
+                for &b in p.nodes() {
+                    let pos = pattern
+                        .node_block(a, b)
+                        .expect("the pattern includes the bending stencils");
+                    self.blocks.push(pattern.block_layout(pos, b).0);
+                }
+            }
+        }
+    }
+
+    /// Adds the bending energy's gradient to `g` and, if given, its
+    /// Hessian to `h` (values on `pattern`, which [`Bending::attach`] was
+    /// given); returns the energy (J).
+    pub fn add(
+        &self,
+        pattern: &SparsePattern,
+        y: &[f64],
+        g: &mut [f64],
+        mut h: Option<&mut [f64]>,
+    ) -> f64 {
+        let (node_ptr, _) = pattern.node_graph();
+        let mut local = kernel::Local::new();
+        let mut x = [[0.0; 3]; kernel::MAX_NODES];
+        let mut energy = 0.0;
+        let mut block = 0;
+        for p in &self.patches {
+            let nodes = p.nodes();
+            let len = nodes.len();
+            for (k, &a) in nodes.iter().enumerate() {
+                x[k] = [y[3 * a], y[3 * a + 1], y[3 * a + 2]];
+            }
+            energy += kernel::evaluate(p, &x[..len], h.is_some(), &mut local);
+            for (k, &a) in nodes.iter().enumerate() {
+                for i in 0..3 {
+                    g[3 * a + i] += local.gradient[3 * k + i];
+                }
+            }
+            if let Some(h) = h.as_deref_mut() {
+                for k in 0..len {
+                    for (l, &b) in nodes.iter().enumerate() {
+                        let base = self.blocks[block + k * len + l];
+                        let stride = 3 * (node_ptr[b + 1] - node_ptr[b]);
+                        for j in 0..3 {
+                            for i in 0..3 {
+                                h[base + j * stride + i] += local.hessian[3 * k + i][3 * l + j];
+                            }
+                        }
+                    }
+                }
+            }
+            block += len * len;
+        }
+        energy
+    }
+
+    /// The bending energy at `y` (J).
+    pub fn energy(&self, y: &[f64]) -> f64 {
+        let mut x = [[0.0; 3]; kernel::MAX_NODES];
+        self.patches
+            .iter()
+            .map(|p| {
+                let nodes = p.nodes();
+                for (k, &a) in nodes.iter().enumerate() {
+                    x[k] = [y[3 * a], y[3 * a + 1], y[3 * a + 2]];
+                }
+                let kappa = kernel::curvature(p, &x[..nodes.len()]);
+                let e = [0, 1, 2].map(|j| kappa[j] - p.rest[j]);
+                let s = &p.stiffness;
+                0.5 * (0..3)
+                    .map(|i| e[i] * (s[i][0] * e[0] + s[i][1] * e[1] + s[i][2] * e[2]))
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+
+    /// The order of mesh this was built for supports bending: all do.
+    pub fn supports(order: ElementOrder) -> bool {
+        matches!(
+            order,
+            ElementOrder::Linear | ElementOrder::Quadratic | ElementOrder::Cubic
+        )
+    }
+}

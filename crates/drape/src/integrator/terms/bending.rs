@@ -1,0 +1,171 @@
+//! The bending energy ([`crate::bending`], docs/theory.md §1.10):
+//!
+//! ```text
+//! W_bend(Y) = sum_T 1/2 A_T (kappa_T(Y) - kappa_T0) . D (kappa_T(Y) - kappa_T0)
+//! ```
+//!
+//! over the mesh's (sub-)triangles, each coupling its nodes with the nodes
+//! opposite its edges (the patch stencils, part of the model's pattern).
+
+use super::super::potential::{Stencils, StepContext, StepTerm, TermValue};
+use crate::bending::Bending;
+use crate::solver::SparsePattern;
+
+/// The bending energy of a model with bending stiffness.
+pub struct BendingTerm<'a> {
+    bending: &'a Bending,
+    pattern: &'a SparsePattern,
+    /// Scratch for the term's own forces (their norm is its scale).
+    forces: Vec<f64>,
+}
+
+impl<'a> BendingTerm<'a> {
+    /// The term of `bending`, adding its Hessian on `pattern` (the
+    /// pattern [`Bending::attach`] was given).
+    pub fn new(bending: &'a Bending, pattern: &'a SparsePattern) -> Self {
+        Self {
+            bending,
+            pattern,
+            forces: Vec::new(),
+        }
+    }
+}
+
+impl StepTerm for BendingTerm<'_> {
+    fn name(&self) -> &'static str {
+        "bending"
+    }
+
+    fn stencils(&self) -> Stencils<'_> {
+        let (ptr, nodes) = self.bending.stencil_lists();
+        Stencils::Custom { ptr, nodes }
+    }
+
+    fn add(
+        &mut self,
+        _ctx: &StepContext,
+        y: &[f64],
+        g: &mut [f64],
+        h: Option<&mut [f64]>,
+    ) -> TermValue {
+        self.forces.clear();
+        self.forces.resize(y.len(), 0.0);
+        let value = self.bending.add(self.pattern, y, &mut self.forces, h);
+        let mut scale = 0.0;
+        for (gi, fi) in g.iter_mut().zip(&self.forces) {
+            *gi += fi;
+            scale += fi * fi;
+        }
+        TermValue {
+            value,
+            potential: true,
+            scale: scale.sqrt(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bending::BendingRigidity;
+    use crate::element::membrane::Section;
+    use crate::integrator::terms::check_term;
+    use crate::material::SaintVenantKirchhoff;
+    use crate::mesh::generate::{Pattern, rectangle};
+    use crate::mesh::{ElementOrder, Mesh};
+    use crate::model::{MassKind, Model};
+
+    fn model(mesh: Mesh, rigidity: BendingRigidity) -> Model {
+        Model::new(
+            mesh,
+            Box::new(SaintVenantKirchhoff::new(2e6, 0.3)),
+            Section {
+                thickness: 6e-4,
+                prestress: 0.0,
+            },
+            320.0,
+            vec![],
+            vec![],
+            MassKind::Consistent,
+        )
+        .and_then(|m| m.with_bending(rigidity))
+        .expect("a valid model")
+    }
+
+    /// A 10 cm square (4 x 3 squares, alternating diagonals) of `order`,
+    /// folded: `fold` scales a deformation that stretches, shears and
+    /// rolls the sheet up (0: flat; 1: about a right angle of folding;
+    /// 3: folded nearly onto itself).
+    fn folded(model: &Model, fold: f64) -> Vec<f64> {
+        // Rolled onto a cylinder of curvature k about the y axis (k = 15
+        // 1/m per unit `fold`: a right angle over the 10 cm at fold 1),
+        // then stretched, sheared and rippled.
+        let k = 15.0 * fold;
+        let roll = |s: f64| {
+            if k == 0.0 {
+                (s, 0.0)
+            } else {
+                ((k * s).sin() / k, (1.0 - (k * s).cos()) / k)
+            }
+        };
+        model
+            .initial_positions()
+            .chunks(3)
+            .flat_map(|x| {
+                let (u, w) = roll(x[0] + 0.05);
+                [
+                    1.01 * u + 0.01 * x[1],
+                    x[1] + 0.02 * x[0] * x[1],
+                    w + 0.01 * fold.min(1.0) * (30.0 * x[1]).sin(),
+                ]
+            })
+            .collect()
+    }
+
+    /// Energy, gradient and Hessian against central differences, flat,
+    /// near-flat, folded and strongly folded, for each element order and
+    /// each kind of rigidity.
+    #[test]
+    fn bending_term_matches_finite_differences() {
+        let ctx = StepContext {
+            time: 0.0,
+            contact: None,
+        };
+        let rigidities = [
+            BendingRigidity::Isotropic(2e-5),
+            BendingRigidity::Woven {
+                warp: 3e-5,
+                weft: 1e-5,
+                direction: [1.0, 1.0, 0.0],
+            },
+            BendingRigidity::Plate {
+                rigidity: 4e-5,
+                poisson_ratio: 0.3,
+            },
+        ];
+        for order in [
+            ElementOrder::Linear,
+            ElementOrder::Quadratic,
+            ElementOrder::Cubic,
+        ] {
+            for rigidity in rigidities {
+                let mesh = rectangle([0.1, 0.1], [4, 3], Pattern::Alternate, [0.0; 3], order);
+                let m = model(mesh, rigidity);
+                let bending = m.bending.as_ref().expect("bending");
+                for fold in [0.0, 1e-3, 1.0, 3.0] {
+                    let y = folded(&m, fold);
+                    let mut term = BendingTerm::new(bending, &m.pattern);
+                    let (eh, eg) = check_term(&mut term, &ctx, &m.pattern, &y, 1e-7);
+                    assert!(
+                        eh < 1e-6,
+                        "{order:?} {rigidity:?} fold {fold}: Hessian {eh:e}"
+                    );
+                    assert!(
+                        eg < 1e-6,
+                        "{order:?} {rigidity:?} fold {fold}: gradient {eg:e}"
+                    );
+                }
+            }
+        }
+    }
+}

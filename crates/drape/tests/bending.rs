@@ -1,0 +1,373 @@
+//! Bending stiffness against closed forms (the README's `bending_rigidity`,
+//! docs/validation.md "Bending"): the simply supported plate (Kirchhoff),
+//! pure bending into a cylinder, the cantilever strip under its own weight
+//! (small deflection and the elastica), a woven strip along its warp and
+//! its weft, and curved meshes at rest. The derivatives are checked against
+//! finite differences in `integrator/terms/bending.rs`.
+
+mod support;
+
+use drape::bending::BendingRigidity;
+use drape::element::membrane::Section;
+use drape::integrator::newmark::DynamicWorkspace;
+use drape::integrator::{State, StaticStepper};
+use drape::load::{Load, LoadKind};
+use drape::material::SaintVenantKirchhoff;
+use drape::mesh::generate::{Pattern, rectangle};
+use drape::mesh::gmsh::read_msh;
+use drape::mesh::{ElementOrder, Mesh};
+use drape::model::{MassKind, Model};
+use drape::simulation::reference_length;
+use drape::solver::NewtonSettings;
+use std::path::Path;
+
+/// A Gmsh mesh of `tests/meshes` (made by `scripts/meshes/bending_meshes.py`).
+fn gmsh(name: &str) -> Mesh {
+    read_msh(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/meshes")
+            .join(name),
+    )
+    .unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// A membrane of modulus `young` (Pa), thickness `t` (m) and density
+/// `rho` under gravity `g` (m/s^2, along -z), with `fixed` components and
+/// bending `rigidity`.
+fn model(
+    mesh: Mesh,
+    young: f64,
+    t: f64,
+    rho: f64,
+    g: f64,
+    fixed: Vec<bool>,
+    rigidity: BendingRigidity,
+) -> Model {
+    let load = Load {
+        kind: LoadKind::Gravity {
+            acceleration: [0.0, 0.0, -g],
+        },
+        ramp: None,
+    };
+    Model::new(
+        mesh,
+        Box::new(SaintVenantKirchhoff::new(young, 0.3)),
+        Section {
+            thickness: t,
+            prestress: 0.0,
+        },
+        rho,
+        vec![load],
+        fixed,
+        MassKind::Lumped,
+    )
+    .and_then(|m| m.with_bending(rigidity))
+    .unwrap()
+}
+
+/// Static equilibrium under the full load, applied in `increments` equal
+/// load steps from the initial mesh; returns the positions and the Newton
+/// iterations of each increment.
+fn equilibrium(model: &Model, increments: usize) -> (Vec<f64>, Vec<usize>) {
+    let mut ws = DynamicWorkspace::new(model).unwrap();
+    let mut state = State::at_rest(model, model.initial_positions());
+    let settings = NewtonSettings {
+        tolerance: 1e-12,
+        residual_tolerance: 1e-6,
+        max_iterations: 40,
+        chord_steps: 0,
+    };
+    let length = reference_length(&model.initial_positions());
+    let mut iterations = Vec::new();
+    for _ in 0..increments {
+        let report = StaticStepper
+            .step(
+                model,
+                &mut state,
+                1.0 / increments as f64,
+                &settings,
+                length,
+                &mut ws,
+            )
+            .unwrap();
+        iterations.push(report.newton.iterations);
+    }
+    (state.positions, iterations)
+}
+
+/// Components of the nodes of `nodes` held.
+fn hold(count: usize, nodes: impl IntoIterator<Item = usize>) -> Vec<bool> {
+    let mut fixed = vec![false; 3 * count];
+    for a in nodes {
+        fixed[3 * a..3 * a + 3].fill(true);
+    }
+    fixed
+}
+
+/// Least-squares slope of log(error) against log(h).
+fn rate(h: &[f64], err: &[f64]) -> f64 {
+    let n = h.len() as f64;
+    let (lx, ly): (Vec<f64>, Vec<f64>) = (
+        h.iter().map(|v| v.ln()).collect(),
+        err.iter().map(|v| v.ln()).collect(),
+    );
+    let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
+    let sxy: f64 = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = lx.iter().map(|x| (x - mx) * (x - mx)).sum();
+    sxy / sxx
+}
+
+/// The simply supported square plate under a uniform load (Timoshenko &
+/// Woinowsky-Krieger, "Theory of plates and shells", 1959, table 8):
+/// centre deflection `w = 0.00406 q a^4 / D` for nu = 0.3 (Navier's series
+/// gives 0.004062). Boundary nodes held (w = 0, free rotation); the load
+/// small (w/t ~ 1e-2), so that the membrane's stretching is negligible.
+#[test]
+fn simply_supported_plate_matches_kirchhoff() {
+    let (a, young, t, rho, g): (f64, f64, f64, f64, f64) = (0.2, 1.0e9, 1.0e-3, 1000.0, 0.0981);
+    let d = young * t.powi(3) / (12.0 * (1.0 - 0.09));
+    let q = rho * t * g;
+    let exact = 0.004062 * q * a.powi(4) / d;
+    let rigidity = BendingRigidity::Plate {
+        rigidity: d,
+        poisson_ratio: 0.3,
+    };
+    let deflection = |mesh: Mesh| {
+        let centre = mesh.nearest_node([0.0, 0.0, 0.0]).unwrap().0;
+        let count = mesh.node_count();
+        let boundary = mesh.boundary_nodes();
+        let m = model(mesh, young, t, rho, g, hold(count, boundary), rigidity);
+        let (y, its) = equilibrium(&m, 1);
+        (-y[3 * centre + 2], its[0])
+    };
+    let mut report = String::new();
+    let mut results = Vec::new();
+    for (label, meshes) in [
+        (
+            "structured (right diagonals)",
+            [8, 16, 32].map(|n| {
+                rectangle(
+                    [a, a],
+                    [n, n],
+                    Pattern::Right,
+                    [0.0; 3],
+                    ElementOrder::Linear,
+                )
+            }),
+        ),
+        (
+            "structured (union jack)",
+            [8, 16, 32].map(|n| {
+                rectangle(
+                    [a, a],
+                    [n, n],
+                    Pattern::Alternate,
+                    [0.0; 3],
+                    ElementOrder::Linear,
+                )
+            }),
+        ),
+        (
+            "unstructured Gmsh",
+            [8, 16, 32].map(|n| gmsh(&format!("plate-unstructured-{n}.msh"))),
+        ),
+    ] {
+        let mut hs = Vec::new();
+        let mut es = Vec::new();
+        for mesh in meshes {
+            let h = a / (mesh.element_count() as f64 / 2.0).sqrt();
+            let elements = mesh.element_count();
+            let (w, its) = deflection(mesh);
+            let e = (w - exact) / exact;
+            report += &format!(
+                "{label}: {elements} T3, w = {w:.5e} m ({:+.2} %), {its} Newton iterations\n",
+                100.0 * e
+            );
+            hs.push(h);
+            es.push(e);
+        }
+        let p = rate(&hs, &es.iter().map(|e| e.abs()).collect::<Vec<_>>());
+        report += &format!("{label}: error ~ h^{p:.2}\n");
+        results.push((label, es, p));
+    }
+    let t6 = (deflection(gmsh("plate-unstructured-16-t6.msh")).0 - exact) / exact;
+    report += &format!("unstructured Gmsh T6, 616 elements: {:+.2} %\n", 100.0 * t6);
+    eprintln!("exact w = {exact:.5e} m\n{report}");
+    for (label, es, p) in &results {
+        assert!(
+            es[0].abs() > es[1].abs() && es[1].abs() > es[2].abs(),
+            "{label}: not converging\n{report}"
+        );
+        assert!(*p > 1.5, "{label}: rate {p}\n{report}");
+        assert!(es[2].abs() < 0.03, "{label}\n{report}");
+    }
+    // Structured and unstructured meshes of about 500 triangles.
+    assert!(results[0].1[1].abs() < 0.03, "{report}");
+    assert!(results[2].1[1].abs() < 0.05, "{report}");
+    assert!(t6.abs() < 0.05, "{report}");
+}
+
+/// Pure bending: a flat strip laid onto a cylinder of radius `R` (an
+/// isometry, so the membrane is unstrained) stores `B L W / (2 R^2)`, for
+/// each element order, on a fine mesh (the triangles along the strip's
+/// ends, whose free edges may rotate, store less: an error of order
+/// `h / L`, -1.3 % at 80 divisions along the strip in T3).
+#[test]
+fn strip_rolled_into_a_cylinder_stores_the_closed_form_energy() {
+    let (l, w, r, b) = (0.2, 0.05, 0.1, 2.0e-5);
+    let exact = b * l * w / (2.0 * r * r);
+    for (order, n) in [
+        (ElementOrder::Linear, 160),
+        (ElementOrder::Quadratic, 80),
+        (ElementOrder::Cubic, 54),
+    ] {
+        let mesh = rectangle([l, w], [n, n / 4], Pattern::Alternate, [0.0; 3], order);
+        let count = mesh.node_count();
+        let m = model(
+            mesh,
+            2e6,
+            6e-4,
+            320.0,
+            0.0,
+            vec![false; 3 * count],
+            BendingRigidity::Isotropic(b),
+        );
+        let y: Vec<f64> = m
+            .initial_positions()
+            .chunks(3)
+            .flat_map(|x| [r * (x[0] / r).sin(), x[1], r * (1.0 - (x[0] / r).cos())])
+            .collect();
+        let energy = m.bending.as_ref().unwrap().energy(&y);
+        let e = (energy - exact) / exact;
+        eprintln!(
+            "{order:?}, {n} divisions along: {energy:.6e} J against {exact:.6e} J ({:+.3} %)",
+            100.0 * e
+        );
+        assert!(e.abs() < 0.01, "{order:?}: {energy:e} J, exact {exact:e} J");
+    }
+}
+
+/// Tip deflection of a cantilever strip of length `l` (m) and width 2 cm
+/// clamped by holding its first two columns of nodes, for `rigidity`:
+/// returns the deflection and the free length (the clamp sits midway
+/// between the two held columns, as a clamped end in finite differences
+/// where `w_0 = w_1`).
+fn cantilever(
+    l: f64,
+    divisions: usize,
+    rigidity: BendingRigidity,
+    increments: usize,
+) -> (f64, f64) {
+    let h = l / divisions as f64;
+    let mesh = rectangle(
+        [l, 0.02],
+        [divisions, 4],
+        Pattern::Alternate,
+        [0.5 * l, 0.0, 0.0],
+        ElementOrder::Linear,
+    );
+    let count = mesh.node_count();
+    let held = (0..count).filter(|&a| mesh.nodes[a][0] < 1.5 * h);
+    let fixed = hold(count, held);
+    let tip: Vec<usize> = (0..count)
+        .filter(|&a| (mesh.nodes[a][0] - l).abs() < 1e-12)
+        .collect();
+    let m = model(mesh, 2e6, 6e-4, 320.0, 9.81, fixed, rigidity);
+    let (y, its) = equilibrium(&m, increments);
+    eprintln!("  Newton iterations per increment: {its:?}");
+    let deflection = -tip.iter().map(|&a| y[3 * a + 2]).sum::<f64>() / tip.len() as f64;
+    (deflection, l - 0.5 * h)
+}
+
+/// The weight per unit area of the strips (Pa): 0.6 mm at 320 kg/m^3.
+const Q: f64 = 320.0 * 6e-4 * 9.81;
+
+/// Small deflection: `w = q L^4 / (8 B)` (q L^3 / B = 0.01, so that the
+/// elastica is within 0.1 % of it).
+#[test]
+fn cantilever_small_deflection_matches_beam_theory() {
+    let l: f64 = 0.2;
+    let b = Q * l.powi(3) / 0.01;
+    let (w, free) = cantilever(l, 40, BendingRigidity::Isotropic(b), 1);
+    let exact = Q * free.powi(4) / (8.0 * b);
+    let e = (w - exact) / exact;
+    eprintln!(
+        "small deflection: {w:.5e} m against {exact:.5e} m ({:+.2} %)",
+        100.0 * e
+    );
+    assert!(e.abs() < 0.03);
+}
+
+/// Large deflection (q L^3 / B = 15, the tip 79 % of the length below the
+/// clamp): the tip within 2 mm of the elastica's.
+#[test]
+fn cantilever_large_deflection_matches_the_elastica() {
+    let (l, b) = (0.2, 1.0e-3);
+    let (w, free) = cantilever(l, 40, BendingRigidity::Isotropic(b), 10);
+    let reference = support::elastica::cantilever(free, Q, b);
+    eprintln!(
+        "elastica (k = {:.2}): tip {:.5} m below the clamp, drape {w:.5} m ({:+.2} mm)",
+        Q * free.powi(3) / b,
+        reference.tip_deflection,
+        1e3 * (w - reference.tip_deflection)
+    );
+    assert!((w - reference.tip_deflection).abs() < 2e-3);
+}
+
+/// A woven strip bends by its warp rigidity when laid along the warp and
+/// by its weft rigidity when laid along the weft.
+#[test]
+fn woven_strip_bends_by_the_rigidity_along_it() {
+    let l: f64 = 0.2;
+    let (warp, weft) = (Q * l.powi(3) / 0.01, Q * l.powi(3) / 0.004);
+    for (direction, along) in [([1.0, 0.0, 0.0], warp), ([0.0, 1.0, 0.0], weft)] {
+        let rigidity = BendingRigidity::Woven {
+            warp,
+            weft,
+            direction,
+        };
+        let (w, free) = cantilever(l, 40, rigidity, 1);
+        let exact = Q * free.powi(4) / (8.0 * along);
+        let e = (w - exact) / exact;
+        eprintln!(
+            "warp along {direction:?}: {w:.5e} m against {exact:.5e} m ({:+.2} %)",
+            100.0 * e
+        );
+        assert!(
+            e.abs() < 0.03,
+            "warp {direction:?}: {w:e} m, exact {exact:e} m"
+        );
+    }
+}
+
+/// A curved mesh is unbent: with no load a static step leaves it where it
+/// is (the cylindrical panel in T3, the spherical cap in T6, both from
+/// Gmsh), although it stores energy as soon as it is flattened.
+#[test]
+fn curved_meshes_stay_at_rest() {
+    for name in ["cylinder-panel-t3.msh", "sphere-cap-t6.msh"] {
+        let mesh = gmsh(name);
+        let count = mesh.node_count();
+        let m = model(
+            mesh,
+            2e6,
+            6e-4,
+            320.0,
+            0.0,
+            hold(count, [0]),
+            BendingRigidity::Isotropic(2e-5),
+        );
+        let x = m.initial_positions();
+        let (y, _) = equilibrium(&m, 1);
+        let moved = x
+            .iter()
+            .zip(&y)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(moved < 1e-9, "{name}: moved {moved:e} m");
+        let bending = m.bending.as_ref().unwrap();
+        assert_eq!(bending.energy(&x), 0.0);
+        let flattened: Vec<f64> = x.chunks(3).flat_map(|p| [p[0], p[1], 0.0]).collect();
+        assert!(bending.energy(&flattened) > 0.0, "{name}");
+    }
+}

@@ -1,0 +1,2 @@
+//! Reference solutions the tests compare with.
+pub mod elastica;
