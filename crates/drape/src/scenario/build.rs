@@ -337,7 +337,9 @@ fn build_bending(c: &Checker, m: &MaterialSpec) -> Result<Option<BendingRigidity
             (b > 0.0).then_some(BendingRigidity::Isotropic(b))
         }
     };
-    if m.warp_direction.is_some() && !matches!(value, Some(BendingRigidity::Woven { .. })) {
+    // Judged on what was written: a woven `{ warp = 0, weft = 0 }` is no
+    // bending, but its warp direction is still in place.
+    if m.warp_direction.is_some() && !matches!(m.bending_rigidity, Some(toml::Value::Table(_))) {
         return Err(c.invalid(
             t,
             None,

@@ -1,0 +1,366 @@
+//! `[material] bending_rigidity` and `warp_direction` in a scenario: bad
+//! values give errors naming the key, the value (or the element) and the
+//! key's line; good ones build the bending the README describes.
+
+mod common;
+
+use drape::bending::{Bending, BendingRigidity};
+use drape::mesh::{ElementOrder, Mesh};
+use drape::scenario::{Scenario, Setup};
+use std::path::Path;
+
+/// A 4 cm x 3 cm flat fabric (4 x 3 squares, in z = 0) with `rigidity` on
+/// line 10 and `direction` on line 11 (each a whole line, or empty).
+fn scenario(rigidity: &str, direction: &str) -> String {
+    format!(
+        "[mesh]
+shape = \"rectangle\"
+size = [0.04, 0.03]
+divisions = [4, 3]
+[material]
+youngs_modulus = 2.0e6
+poisson_ratio = 0.3
+density = 320.0
+thickness = 0.6e-3
+{rigidity}
+{direction}
+prestress = 0.0
+[time]
+segments = [{{ steps = 1, dt = 1.0e-3 }}]
+"
+    )
+}
+
+const RIGIDITY_LINE: usize = 10;
+const DIRECTION_LINE: usize = 11;
+
+fn build(text: &str, path: &Path) -> Result<Setup, String> {
+    Scenario::parse(text, path)
+        .and_then(|s| s.build(path, text))
+        .map_err(|e| e.to_string())
+}
+
+/// The error of `text`, which must contain `test.toml, line {line}:
+/// `{key}`` and each of `fragments`.
+fn assert_error(text: &str, line: usize, key: &str, fragments: &[&str]) {
+    let message = match build(text, Path::new("test.toml")) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e,
+    };
+    let located = format!("test.toml, line {line}: `{key}`");
+    assert!(
+        message.contains(&located),
+        "expected {located:?} in\n{message}\nfor\n{text}"
+    );
+    for f in fragments {
+        assert!(
+            message.contains(f),
+            "expected {f:?} in\n{message}\nfor\n{text}"
+        );
+    }
+}
+
+#[test]
+fn a_bad_scalar_rigidity_is_named_with_its_value() {
+    let key = "material.bending_rigidity";
+    for (value, shown) in [
+        ("-1.0", "-1"),
+        ("-2", "-2"),
+        ("nan", "nan"),
+        ("inf", "inf"),
+        ("-inf", "-inf"),
+        ("true", "true"),
+        ("[1e-5, 1e-5]", "[0.00001, 0.00001]"),
+    ] {
+        let text = scenario(&format!("bending_rigidity = {value}"), "");
+        assert_error(
+            &text,
+            RIGIDITY_LINE,
+            key,
+            &[
+                &format!("not {shown}"),
+                "a finite number >= 0 (N m)",
+                "{ warp, weft }",
+                "\"plate\"",
+            ],
+        );
+    }
+    // An unknown string.
+    let text = scenario("bending_rigidity = \"stiff\"", "");
+    assert_error(&text, RIGIDITY_LINE, key, &["not \"stiff\"", "\"plate\""]);
+}
+
+#[test]
+fn a_bad_woven_rigidity_names_the_inner_key() {
+    for (value, inner, fragments) in [
+        (
+            "{ warp = 1e-5 }",
+            "weft",
+            &["is required", "{ warp, weft }"][..],
+        ),
+        ("{ weft = 1e-5 }", "warp", &["is required"][..]),
+        (
+            "{ warp = 1e-5, weft = 1e-5, twist = 1e-5 }",
+            "twist",
+            &["is not a key of bending_rigidity", "warp and weft"][..],
+        ),
+        (
+            "{ warp = -1e-5, weft = 1e-5 }",
+            "warp",
+            &[">= 0 (N m)", "not -0.00001"][..],
+        ),
+        ("{ warp = 1e-5, weft = nan }", "weft", &["not NaN"][..]),
+        ("{ warp = inf, weft = 1e-5 }", "warp", &["not inf"][..]),
+        (
+            "{ warp = 1e-5, weft = \"soft\" }",
+            "weft",
+            &["must be a number (N m)", "\"soft\""][..],
+        ),
+    ] {
+        let text = scenario(&format!("bending_rigidity = {value}"), "");
+        assert_error(
+            &text,
+            RIGIDITY_LINE,
+            &format!("material.bending_rigidity.{inner}"),
+            fragments,
+        );
+    }
+}
+
+/// Written as its own table, the inner key's own line is given.
+#[test]
+fn a_bad_woven_rigidity_in_its_own_table_gives_the_inner_line() {
+    let text = "[mesh]
+shape = \"rectangle\"
+size = [0.04, 0.03]
+divisions = [4, 3]
+[material]
+youngs_modulus = 2.0e6
+poisson_ratio = 0.3
+density = 320.0
+thickness = 0.6e-3
+[material.bending_rigidity]
+weft = 1e-5
+warp = -2.5e-5
+[time]
+segments = [{ steps = 1, dt = 1.0e-3 }]
+";
+    assert_error(
+        text,
+        12,
+        "material.bending_rigidity.warp",
+        &["not -0.000025"],
+    );
+}
+
+#[test]
+fn a_bad_warp_direction_is_named() {
+    let woven = "bending_rigidity = { warp = 2e-5, weft = 1e-5 }";
+    let key = "material.warp_direction";
+    assert_error(
+        &scenario(woven, "warp_direction = [0, 0, 0]"),
+        DIRECTION_LINE,
+        key,
+        &["must not be the zero vector"],
+    );
+    assert_error(
+        &scenario(woven, "warp_direction = [1.0, nan, 0.0]"),
+        DIRECTION_LINE,
+        key,
+        &["must be finite", "NaN"],
+    );
+    // Only a woven fabric has a warp.
+    for rigidity in [
+        "bending_rigidity = 1e-5",
+        "bending_rigidity = \"plate\"",
+        "",
+    ] {
+        assert_error(
+            &scenario(rigidity, "warp_direction = [1, 0, 0]"),
+            DIRECTION_LINE,
+            key,
+            &["applies only to a woven fabric's bending_rigidity = { warp, weft }"],
+        );
+    }
+}
+
+/// A warp normal to the (flat) fabric gives no axis in the elements'
+/// plane: the error names the element (the first one fitted), the
+/// direction and the rigidity's line.
+#[test]
+fn a_warp_normal_to_the_elements_names_the_element() {
+    let text = scenario(
+        "bending_rigidity = { warp = 2e-5, weft = 1e-5 }",
+        "warp_direction = [0, 0, 1]",
+    );
+    assert_error(
+        &text,
+        RIGIDITY_LINE,
+        "material.bending_rigidity",
+        &[
+            "bending patch of element 0",
+            "the warp direction [0.0, 0.0, 1.0] is normal to the element",
+        ],
+    );
+    // Nearly normal is as bad: within 1e-3 of the normal.
+    let text = scenario(
+        "bending_rigidity = { warp = 2e-5, weft = 1e-5 }",
+        "warp_direction = [1e-4, 0, 1]",
+    );
+    assert_error(
+        &text,
+        RIGIDITY_LINE,
+        "material.bending_rigidity",
+        &["element 0", "is normal to the element"],
+    );
+}
+
+/// Three triangles on one edge (a T-junction of three panels, as an OBJ
+/// file). Such a mesh never reaches the bending set-up: the mesh check
+/// rejects it first, since two of the three triangles must run along the
+/// shared edge in the same direction, which it reports as an inconsistent
+/// orientation of two of the elements (with or without bending).
+#[test]
+fn a_non_manifold_mesh_is_rejected_by_the_mesh_check() {
+    let dir = common::temp_dir("bending-non-manifold");
+    std::fs::write(
+        dir.join("t.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0.5 1 0\nv 0.5 -1 0\nv 0.5 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
+    )
+    .unwrap();
+    for rigidity in ["", "bending_rigidity = 1e-5"] {
+        let text = format!(
+            "[mesh]
+shape = \"file\"
+path = \"t.obj\"
+[material]
+youngs_modulus = 2.0e6
+poisson_ratio = 0.3
+density = 320.0
+thickness = 0.6e-3
+{rigidity}
+[time]
+segments = [{{ steps = 1, dt = 1.0e-3 }}]
+"
+        );
+        let message = build(&text, &dir.join("test.toml")).unwrap_err();
+        for f in [
+            "test.toml, line 3: `mesh.path`",
+            "t.obj",
+            "elements 0 and 2 (0-based, in the order read) share an edge but are oriented oppositely",
+        ] {
+            assert!(message.contains(f), "expected {f:?} in\n{message}");
+        }
+    }
+}
+
+/// Called on such a mesh directly (a library caller's mesh that was not
+/// validated), the bending set-up names the edge's nodes and the elements
+/// on it.
+#[test]
+fn bending_on_a_non_manifold_mesh_names_the_edge_and_its_elements() {
+    let mesh = Mesh {
+        nodes: vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.5, 1.0, 0.0],
+            [0.5, -1.0, 0.0],
+            [0.5, 0.0, 1.0],
+            [1.5, 1.0, 0.0],
+        ],
+        order: ElementOrder::Linear,
+        // Element 0 has a second neighbour (element 3) so that not every
+        // triangle is alone; elements 0, 1 and 2 share the edge 0-1.
+        connectivity: vec![0, 1, 2, 1, 0, 3, 4, 1, 0, 2, 1, 5],
+    };
+    let err = Bending::new(&mesh, BendingRigidity::Isotropic(1e-5)).unwrap_err();
+    let message = err.to_string();
+    assert!(
+        message.contains("the edge between nodes 0 and 1 is shared by elements 0, 1, 2"),
+        "{message}"
+    );
+    assert!(message.contains("manifold"), "{message}");
+}
+
+#[test]
+fn zero_rigidity_builds_the_model_without_bending() {
+    let path = Path::new("test.toml");
+    let plain = build(&scenario("", ""), path).unwrap();
+    assert!(plain.model.bending.is_none());
+    let membrane = format!("{:?}", plain.model);
+    for zero in [
+        "bending_rigidity = 0.0",
+        "bending_rigidity = 0",
+        "bending_rigidity = { warp = 0.0, weft = 0 }",
+    ] {
+        let setup = build(&scenario(zero, ""), path).unwrap();
+        assert!(setup.model.bending.is_none(), "{zero}");
+        // The same model, value for value (Debug prints each f64 so that
+        // it reads back to the same bits).
+        assert_eq!(format!("{:?}", setup.model), membrane, "{zero}");
+    }
+    // A zero woven rigidity with its warp direction is no bending either.
+    let setup = build(
+        &scenario(
+            "bending_rigidity = { warp = 0.0, weft = 0.0 }",
+            "warp_direction = [0, 1, 0]",
+        ),
+        path,
+    )
+    .unwrap();
+    assert!(setup.model.bending.is_none());
+}
+
+#[test]
+fn good_rigidities_build_their_bending() {
+    let path = Path::new("test.toml");
+    let rigidity = |r: &str, d: &str| {
+        build(&scenario(r, d), path)
+            .unwrap()
+            .model
+            .bending
+            .expect("bending")
+            .rigidity
+    };
+    // "plate": D = E t^3 / (12 (1 - nu^2)) of the material.
+    let (e, t, nu) = (2.0e6_f64, 0.6e-3_f64, 0.3_f64);
+    let want = e * t.powi(3) / (12.0 * (1.0 - nu * nu));
+    match rigidity("bending_rigidity = \"plate\"", "") {
+        BendingRigidity::Plate {
+            rigidity,
+            poisson_ratio,
+        } => {
+            assert!((rigidity - want).abs() <= 1e-14 * want, "{rigidity} {want}");
+            assert_eq!(poisson_ratio, nu);
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(
+        rigidity("bending_rigidity = 1e-5", ""),
+        BendingRigidity::Isotropic(1e-5)
+    );
+    assert_eq!(
+        rigidity("bending_rigidity = 2", ""),
+        BendingRigidity::Isotropic(2.0)
+    );
+    // Woven: the warp direction defaults to x.
+    assert_eq!(
+        rigidity("bending_rigidity = { warp = 2e-5, weft = 1e-5 }", ""),
+        BendingRigidity::Woven {
+            warp: 2e-5,
+            weft: 1e-5,
+            direction: [1.0, 0.0, 0.0],
+        }
+    );
+    assert_eq!(
+        rigidity(
+            "bending_rigidity = { weft = 0, warp = 3e-5 }",
+            "warp_direction = [1, 1, 0]"
+        ),
+        BendingRigidity::Woven {
+            warp: 3e-5,
+            weft: 0.0,
+            direction: [1.0, 1.0, 0.0],
+        }
+    );
+}
