@@ -291,5 +291,6 @@ fn empty_report() -> NewtonReport {
         residuals: Vec::new(),
         increments: Vec::new(),
         factorization: None,
+        shifts: 0,
     }
 }

@@ -249,6 +249,41 @@ mod tests {
         }
     }
 
+    /// With bending, the membrane still overwrites G and H on the grown
+    /// pattern (zeroing the blocks only bending's stencils touch) and the
+    /// bending term adds into them: the sum's Hessian matches central
+    /// differences of its gradient, for each element order.
+    #[test]
+    fn bending_adds_into_the_membranes_pattern() {
+        use crate::bending::BendingRigidity;
+        use crate::integrator::terms::BendingTerm;
+        for order in 1..=3 {
+            let model = patch_model(order, Box::new(SaintVenantKirchhoff::new(2e6, 0.3)), vec![])
+                .with_bending(BendingRigidity::Isotropic(2e-2))
+                .expect("bending");
+            let bending = model.bending.as_ref().expect("bending");
+            let y = deformed(&model);
+            let n = y.len();
+            let q: Vec<f64> = y.iter().map(|v| 1e4 * (v - 0.003)).collect();
+            let mut mq = vec![0.0; n];
+            model.mass_times(&q, &mut mq);
+            let mut my = vec![0.0; n];
+            let potential = IncrementalPotential::new(vec![
+                Box::new(MembraneTerm::new(&model)),
+                Box::new(BendingTerm::new(bending, &model.pattern)),
+                Box::new(InertiaTerm::new(&model, 1e4, &mq, &mut my)),
+            ]);
+            let mut whole = Whole(potential);
+            let ctx = StepContext {
+                time: 1.0,
+                contact: None,
+            };
+            let (eh, eg) = check_term(&mut whole, &ctx, &model.pattern, &y, 1e-7);
+            assert!(eh < 1e-6, "order {order}: Hessian {eh:e}");
+            assert!(eg < 1e-6, "order {order}: gradient {eg:e}");
+        }
+    }
+
     /// A dynamic step's potential (membrane, dead load, inertia) is a
     /// potential whose gradient and Hessian are the sum's: checked against
     /// central differences, with the membrane overwriting buffers full of

@@ -249,6 +249,22 @@ impl std::fmt::Debug for LinearSolver {
 }
 
 impl LinearSolver {
+    /// The value index of each diagonal entry (`None` where the pattern
+    /// has none).
+    pub fn diagonal_positions(&self) -> Vec<Option<usize>> {
+        let col_ptr = self.pattern.col_ptr();
+        let rows = self.pattern.row_idx();
+        (0..self.pattern.ncols())
+            .map(|c| {
+                let range = col_ptr[c]..col_ptr[c + 1];
+                rows[range.clone()]
+                    .binary_search(&c)
+                    .ok()
+                    .map(|k| range.start + k)
+            })
+            .collect()
+    }
+
     /// A solver for square matrices with CSC pattern `(col_ptr, row_idx)`
     /// (rows sorted in each column).
     pub fn new(col_ptr: &[usize], row_idx: &[usize]) -> Result<Self, LinearSolveError> {

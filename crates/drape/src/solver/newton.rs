@@ -92,6 +92,9 @@ pub struct NewtonReport {
     pub increments: Vec<f64>,
     /// Factorisation used by the last solve, if any.
     pub factorization: Option<Factorization>,
+    /// Times the Hessian's diagonal was shifted for a descent direction
+    /// (an energy whose Hessian is indefinite).
+    pub shifts: usize,
 }
 
 /// Why Newton stopped without converging.
@@ -178,6 +181,10 @@ pub struct NewtonWorkspace {
     y_old: Vec<f64>,
     /// The sparse direct solver (symbolic analysis kept).
     pub linear: LinearSolver,
+    /// Where the Hessian's diagonal entries are (found on first use) and
+    /// their values before a shift.
+    diagonal: Vec<Option<usize>>,
+    unshifted: Vec<f64>,
 }
 
 impl NewtonWorkspace {
@@ -199,8 +206,59 @@ impl NewtonWorkspace {
             dy: vec![0.0; n],
             y_old: vec![0.0; n],
             linear,
+            diagonal: Vec::new(),
+            unshifted: Vec::new(),
         }
     }
+}
+
+/// The largest number of shifts tried on a Hessian whose Newton direction
+/// goes uphill, and the first shift (relative to each diagonal entry).
+const MAX_SHIFTS: usize = 4;
+const FIRST_SHIFT: f64 = 0.03;
+
+/// With an energy whose Newton direction `dY = -H^-1 G` is no descent
+/// direction (`G . dY >= 0`: `H` is indefinite, as where a membrane is
+/// compressed beyond its buckling load at a long time step), solves again
+/// with the diagonal shifted, `(H + tau |diag H|) dY = -G`, `tau = 0.03`,
+/// `0.3`, `3`, `30` (never 1, which would zero a negative diagonal entry;
+/// Levenberg and Marquardt's scaling; Nocedal & Wright 2006,
+/// §3.4, "modified Newton"), until the direction descends; the Hessian is
+/// left shifted for the step's line search and chord steps. Returns the
+/// slope `G . dY` of the direction kept and the number of shifts.
+fn descend(
+    system: &impl NewtonSystem,
+    ws: &mut NewtonWorkspace,
+    symmetric: bool,
+    mut slope: f64,
+) -> Result<(f64, usize), NewtonError> {
+    let mut shifts = 0;
+    if slope < 0.0 {
+        return Ok((slope, 0));
+    }
+    if ws.diagonal.is_empty() {
+        ws.diagonal = ws.linear.diagonal_positions();
+    }
+    ws.unshifted.clear();
+    ws.unshifted
+        .extend(ws.diagonal.iter().map(|p| p.map_or(0.0, |p| ws.h[p])));
+    let mut tau = FIRST_SHIFT;
+    while slope >= 0.0 && shifts < MAX_SHIFTS {
+        for (p, d) in ws.diagonal.iter().zip(&ws.unshifted) {
+            if let Some(p) = *p {
+                ws.h[p] = d + tau * d.abs();
+            }
+        }
+        for (d, g) in ws.dy.iter_mut().zip(&ws.g) {
+            *d = -g;
+        }
+        ws.linear.solve(&ws.h, symmetric, &mut ws.dy)?;
+        system.transform_increment(&mut ws.dy);
+        slope = dot(&ws.g, &ws.dy);
+        shifts += 1;
+        tau *= 10.0;
+    }
+    Ok((slope, shifts))
 }
 
 /// An increment `|dY| / L` at the round-off of the positions: Newton
@@ -234,6 +292,7 @@ pub fn solve(
         residuals: Vec::new(),
         increments: Vec::new(),
         factorization: None,
+        shifts: 0,
     };
     let mut eval = system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]));
     let mut have_hessian = true;
@@ -305,7 +364,9 @@ pub fn solve(
         // that the residual of a non-convex potential is not).
         let energy0 = eval.energy;
         let slope = if energy0.is_some() {
-            dot(&ws.g, &ws.dy)
+            let (slope, shifts) = descend(system, ws, eval.symmetric, dot(&ws.g, &ws.dy))?;
+            report.shifts += shifts;
+            slope
         } else {
             0.0
         };
@@ -612,6 +673,62 @@ mod tests {
         assert!(y.iter().all(|v| v.abs() < 1e-10), "{y:?}");
         // Quadratic at the end: each residual about the square of the one
         // before (|G| ~ |y| near 0, where the step is y^3).
+        let r = &report.residuals;
+        let n = r.len();
+        assert!(r[n - 1] <= 10.0 * r[n - 2].powi(2) + 1e-300, "{r:?}");
+    }
+
+    /// `E(y) = sum_i (y_i^2 - 1)^2 / 4`, a double well in each component:
+    /// between the wells (`|y_i| < 1 / sqrt 3`) its Hessian `3 y_i^2 - 1`
+    /// is negative, and the Newton direction points uphill, to the
+    /// maximum at 0.
+    struct DoubleWell {
+        energies: Vec<f64>,
+    }
+
+    impl NewtonSystem for DoubleWell {
+        fn evaluate(&mut self, y: &[f64], g: &mut [f64], h: Option<&mut [f64]>) -> Evaluation {
+            for i in 0..3 {
+                g[i] = y[i] * (y[i] * y[i] - 1.0);
+            }
+            if let Some(h) = h {
+                h.fill(0.0);
+                for i in 0..3 {
+                    h[4 * i] = 3.0 * y[i] * y[i] - 1.0;
+                }
+            }
+            let energy: f64 = y.iter().map(|v| 0.25 * (v * v - 1.0).powi(2)).sum();
+            self.energies.push(energy);
+            Evaluation {
+                scale: 1.0,
+                symmetric: true,
+                merit: None,
+                energy: Some(energy),
+            }
+        }
+    }
+
+    /// From between the wells, where the Hessian is negative definite,
+    /// the shifted Hessian gives a descent direction: Newton ends in a
+    /// minimum (every |y_i| = 1), not at the maximum it would run to, the
+    /// energy of its iterates only falls, and it still ends quadratically.
+    #[test]
+    fn an_indefinite_hessian_is_shifted_into_a_descent_direction() {
+        let settings = NewtonSettings {
+            chord_steps: 0,
+            ..NewtonSettings::default()
+        };
+        let mut system = DoubleWell {
+            energies: Vec::new(),
+        };
+        let mut y = [0.3, -0.2, 0.4];
+        let report = solve(&mut system, &mut y, 1.0, &settings, &mut workspace()).unwrap();
+        assert!(report.shifts > 0);
+        assert!(y.iter().all(|v| (v.abs() - 1.0).abs() < 1e-10), "{y:?}");
+        // Energies of the accepted iterates (the trial points of the line
+        // search are among the evaluations; the accepted ones fall).
+        let e = &system.energies;
+        assert!(e.last().unwrap() < &1e-15 && e[0] > 0.5, "{e:?}");
         let r = &report.residuals;
         let n = r.len();
         assert!(r[n - 1] <= 10.0 * r[n - 2].powi(2) + 1e-300, "{r:?}");
