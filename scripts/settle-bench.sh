@@ -8,6 +8,9 @@
 #
 #   cargo build --release -p drape-cli && scripts/settle-bench.sh
 #   MESHES=t3 scripts/settle-bench.sh                 # one mesh only
+#   BENDING=1 scripts/settle-bench.sh                 # the drape tester with bending
+#                                                     # (settle-bending-*.toml: 2e-5 N m,
+#                                                     # no tension-field model, to rest)
 #   FIXED=1 scripts/settle-bench.sh                   # also the same scenario at fixed
 #                                                     # 1 ms steps to t = 2.1 s (no
 #                                                     # adaptive keys, no rest)
@@ -41,7 +44,7 @@ print(f"{'':28s} {s['message']}")
 PY
 }
 for m in $meshes; do
-  scenario=crates/drape-bench/scenarios/settle-$m.toml
+  scenario=crates/drape-bench/scenarios/settle-${BENDING:+bending-}$m.toml
   "$drape" run "$scenario" --out "$work/$m" --quiet || true
   report "$m adaptive" "$work/$m"
   if [[ -n "${FIXED:-}" ]]; then

@@ -105,7 +105,7 @@ impl BendingRigidity {
 pub enum BendingError {
     /// An edge is shared by more than two triangles.
     #[error(
-        "bending needs a manifold mesh: the edge between nodes {} and {} is shared by elements {} (a bending patch has at most one neighbour across each edge)",
+        "bending needs a manifold mesh: the edge between nodes {} and {} is shared by elements {} (0-based, in the order read; a bending patch has at most one neighbour across each edge)",
         .nodes.0, .nodes.1, list(.elements)
     )]
     NonManifold {
@@ -115,7 +115,7 @@ pub enum BendingError {
         elements: Vec<usize>,
     },
     /// A patch cannot be fitted.
-    #[error("bending patch of element {element}: {reason}")]
+    #[error("bending patch of element {element} (0-based, in the order read): {reason}")]
     Patch {
         /// The element (0-based).
         element: usize,

@@ -61,6 +61,18 @@ pub enum MeshError {
         /// Element index.
         element: usize,
     },
+    /// More than two elements share an edge: the mesh is not a surface
+    /// there (a T-junction of panels).
+    #[error(
+        "the edge between nodes {} and {} is shared by elements {} (0-based, in the order read): a surface has at most two elements on an edge (join panels at a T-junction as separate pieces)",
+        .nodes.0, .nodes.1, .elements.iter().map(usize::to_string).collect::<Vec<_>>().join(", ")
+    )]
+    NonManifold {
+        /// The edge's end nodes (0-based).
+        nodes: (usize, usize),
+        /// The elements on it.
+        elements: Vec<usize>,
+    },
     /// Two neighbouring elements have opposite orientations (normals).
     #[error(
         "elements {element} and {neighbour} (0-based, in the order read) share an edge but are oriented oppositely (one of them is inverted)"
@@ -142,6 +154,27 @@ impl Mesh {
                 }
             }
         }
+        // Every edge on at most two elements (checked before orientation:
+        // on a third, two of them would run along it the same way).
+        let mut on_edge: std::collections::HashMap<(usize, usize), Vec<usize>> =
+            std::collections::HashMap::with_capacity(self.element_count() * 2);
+        for (e, el) in self.elements().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (el[k], el[(k + 1) % 3]);
+                on_edge.entry((a.min(b), a.max(b))).or_default().push(e);
+            }
+        }
+        if let Some((&nodes, elements)) = on_edge
+            .iter()
+            .filter(|(_, list)| list.len() > 2)
+            .min_by_key(|(edge, _)| **edge)
+        {
+            return Err(MeshError::NonManifold {
+                nodes,
+                elements: elements.clone(),
+            });
+        }
+        drop(on_edge);
         let mut edge_owner: std::collections::HashMap<(usize, usize), usize> =
             std::collections::HashMap::with_capacity(self.element_count() * 2);
         for (e, el) in self.elements().enumerate() {
