@@ -220,6 +220,30 @@ where
     join(|| f(0..mid), || f(mid..len))
 }
 
+/// A raw pointer shared by the threads of one colour of a parallel
+/// assembly; sound because the elements (or stencils) of a colour touch
+/// disjoint entries.
+#[derive(Clone, Copy)]
+pub(crate) struct Shared(pub(crate) *mut f64);
+unsafe impl Send for Shared {}
+unsafe impl Sync for Shared {}
+
+impl Shared {
+    /// # Safety
+    /// `k` is in bounds and no other thread writes entry `k` concurrently.
+    #[inline]
+    pub(crate) unsafe fn add(self, k: usize, v: f64) {
+        unsafe { *self.0.add(k) += v }
+    }
+
+    /// # Safety
+    /// As [`Shared::add`].
+    #[inline]
+    pub(crate) unsafe fn set(self, k: usize, v: f64) {
+        unsafe { *self.0.add(k) = v }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

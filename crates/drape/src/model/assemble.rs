@@ -17,30 +17,8 @@ use crate::element::membrane::{
     element_force_hessian_or_zero, element_stress_state, principal_values,
 };
 use crate::load::pressure::add_pressure_force;
+use crate::par::Shared;
 use rayon::prelude::*;
-
-/// A raw pointer shared by the threads of one colour; sound because the
-/// elements of a colour touch disjoint entries (see the module docs).
-#[derive(Clone, Copy)]
-struct Shared(*mut f64);
-unsafe impl Send for Shared {}
-unsafe impl Sync for Shared {}
-
-impl Shared {
-    /// # Safety
-    /// `k` is in bounds and no other thread writes entry `k` concurrently.
-    #[inline]
-    unsafe fn add(self, k: usize, v: f64) {
-        unsafe { *self.0.add(k) += v }
-    }
-
-    /// # Safety
-    /// As [`Shared::add`].
-    #[inline]
-    unsafe fn set(self, k: usize, v: f64) {
-        unsafe { *self.0.add(k) = v }
-    }
-}
 
 /// Adds (or, for a block's first element, writes) the element Hessian `k`
 /// (row-major, `3N x 3N`) of an element with nodes `el` into the Hessian

@@ -320,7 +320,7 @@ impl Model {
             self.halves.as_ref(),
             Some(&bending),
         );
-        bending.attach(&layout.pattern);
+        bending.attach(&layout.pattern, self.parallel());
         self.mass = mass::assemble_mass(
             &self.mesh,
             &layout.pattern,
