@@ -42,7 +42,8 @@ enum Command {
     /// Ctrl-C or SIGTERM ends the current step, writes a checkpoint and the
     /// summary (status "interrupted") and exits with code 130; `--resume
     /// DIR` continues from the newest checkpoint in DIR, and refuses if
-    /// the scenario has changed.
+    /// the scenario or a file it reads (the mesh, an obstacle's mesh) has
+    /// changed.
     Run {
         /// The scenario file (TOML); with --resume, defaults to the one the
         /// run was started with.
@@ -308,6 +309,11 @@ fn run(
         (None, None) => unreachable!("clap requires one of them"),
     };
     let path = path.as_path();
+    if let Some(dir) = &resume {
+        // A changed or missing input file is named as such, before the
+        // scenario reads it.
+        simulation::check_resume_inputs(dir).map_err(|e| Failure::Input(e.into()))?;
+    }
     let setup = load(path)?;
     let out = resume.clone().or(out).unwrap_or_else(|| {
         let stem = path

@@ -81,16 +81,74 @@ pub struct Setup {
     pub scenario_path: PathBuf,
     /// FNV-1a hash of the scenario text: a resumed run refuses a changed scenario.
     pub scenario_hash: u64,
+    /// The files the scenario reads (the mesh, the obstacles' meshes), in
+    /// scenario order, with the hash of the bytes read: a resumed run
+    /// refuses a changed one.
+    pub inputs: Vec<InputFile>,
 }
+
+/// FNV-1a's initial state (its offset basis).
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
 
 /// 64-bit FNV-1a of `bytes`: stable across platforms and Rust versions.
 pub fn fnv1a(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    fnv1a_extend(FNV_OFFSET, bytes)
+}
+
+/// FNV-1a continued from the state `h` over `bytes`: hashing a file in
+/// pieces gives [`fnv1a`] of the whole (see [`InputFile::hash_file`]).
+pub(crate) fn fnv1a_extend(mut h: u64, bytes: &[u8]) -> u64 {
     for b in bytes {
         h ^= u64::from(*b);
         h = h.wrapping_mul(0x0000_0100_0000_01b3);
     }
     h
+}
+
+/// A file a scenario reads, as it was when the setup was built.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct InputFile {
+    /// The scenario key that names it: `mesh.path`, `obstacle[1].path`.
+    pub key: String,
+    /// Its path (absolute when it could be resolved).
+    pub path: PathBuf,
+    /// [`fnv1a`] of its bytes.
+    pub hash: u64,
+}
+
+impl InputFile {
+    /// The input read from `path` under `key`, whose bytes were `bytes`.
+    pub(crate) fn new(key: String, path: &Path, bytes: &[u8]) -> Self {
+        Self {
+            key,
+            path: std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf()),
+            hash: fnv1a(bytes),
+        }
+    }
+
+    /// [`fnv1a`] of the file at `path` now, read in pieces (a mesh may be
+    /// large). Anything but a regular file is refused before it is opened
+    /// (a FIFO would block).
+    pub fn hash_file(path: &Path) -> std::io::Result<u64> {
+        use std::io::Read;
+        if !std::fs::metadata(path)?.is_file() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "not a regular file",
+            ));
+        }
+        let mut file = std::fs::File::open(path)?;
+        let mut buffer = vec![0u8; 1 << 16];
+        let mut h = FNV_OFFSET;
+        loop {
+            match file.read(&mut buffer) {
+                Ok(0) => return Ok(h),
+                Ok(n) => h = fnv1a_extend(h, &buffer[..n]),
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+    }
 }
 
 impl Scenario {
@@ -103,7 +161,8 @@ impl Scenario {
         let c = Checker { file, source };
         let base = file.parent().map(Path::to_path_buf).unwrap_or_default();
         let is_static = self.analysis.kind == AnalysisKind::Static;
-        let mesh = build_mesh(&c, &self.mesh, &base)?;
+        let mut inputs = Vec::new();
+        let mesh = build_mesh(&c, &self.mesh, &base, &mut inputs)?;
         let (material, section, density) = build_material(&c, &self.material, is_static)?;
         let bending = build_bending(&c, &self.material)?;
         let loads = (self.loads.iter().enumerate())
@@ -113,7 +172,7 @@ impl Scenario {
         for (i, f) in self.fixes.iter().enumerate() {
             build_fix(&c, &mesh, i, f, &mut fixed)?;
         }
-        let contact = build_contact(&c, self, &base)?;
+        let contact = build_contact(&c, self, &base, &mut inputs)?;
         let (analysis, adaptive, rest) = build_analysis(&c, self)?;
         let newton = build_newton(&c, &self.solver)?;
         if self.output.every == 0 {
@@ -167,6 +226,7 @@ impl Scenario {
             linear: self.solver.linear,
             scenario_path: std::fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf()),
             scenario_hash: fnv1a(source.as_bytes()),
+            inputs,
         })
     }
 }
@@ -651,7 +711,13 @@ fn nearest(
     Ok(node)
 }
 
-fn build_mesh(c: &Checker, spec: &MeshSpec, base: &Path) -> Result<Mesh, ScenarioError> {
+/// `[mesh]`; a file mesh is recorded in `inputs`.
+fn build_mesh(
+    c: &Checker,
+    spec: &MeshSpec,
+    base: &Path,
+    inputs: &mut Vec<InputFile>,
+) -> Result<Mesh, ScenarioError> {
     let order = match spec.order {
         None => None,
         Some(p) => Some(ElementOrder::from_degree(p).ok_or_else(|| {
@@ -663,7 +729,7 @@ fn build_mesh(c: &Checker, spec: &MeshSpec, base: &Path) -> Result<Mesh, Scenari
     let mesh = match spec.shape {
         MeshShape::Rectangle => rectangle_mesh(c, spec, order, center)?,
         MeshShape::Disc => disc_mesh(c, spec, order, center)?,
-        MeshShape::File => file_mesh(c, spec, order, base)?,
+        MeshShape::File => file_mesh(c, spec, order, base, inputs)?,
     };
     mesh.validate().map_err(|e| ScenarioError::Mesh {
         file: c.file.to_path_buf(),
@@ -790,6 +856,7 @@ fn file_mesh(
     spec: &MeshSpec,
     order: Option<ElementOrder>,
     base: &Path,
+    inputs: &mut Vec<InputFile>,
 ) -> Result<Mesh, ScenarioError> {
     let t = "mesh";
     c.none_of(
@@ -807,7 +874,9 @@ fn file_mesh(
     )?;
     let rel = c.required(t, None, "path", &spec.path, "for shape = \"file\"")?;
     let path: PathBuf = base.join(&rel);
-    let mesh = read_mesh_file(&path).map_err(|message| c.invalid(t, None, "path", message))?;
+    let (mesh, bytes) =
+        read_mesh_file_bytes(&path).map_err(|message| c.invalid(t, None, "path", message))?;
+    inputs.push(InputFile::new("mesh.path".into(), &path, &bytes));
     mesh.validate()
         .map_err(|e| c.invalid(t, None, "path", format!("{}: {e}", path.display())))?;
     if let Some(o) = order
@@ -830,15 +899,24 @@ fn file_mesh(
 
 /// Reads a `.msh` or `.obj` mesh file.
 pub fn read_mesh_file(path: &Path) -> Result<Mesh, String> {
+    read_mesh_file_bytes(path).map(|(mesh, _)| mesh)
+}
+
+/// [`read_mesh_file`], with the file's bytes as read (their hash is
+/// recorded, for a resume to tell a changed file).
+fn read_mesh_file_bytes(path: &Path) -> Result<(Mesh, Vec<u8>), String> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("msh") => crate::mesh::gmsh::read_msh(path).map_err(|e| e.to_string()),
-        Some("obj") => crate::mesh::obj::read_obj(path).map_err(|e| e.to_string()),
-        _ => Err("unknown mesh format: expected a .msh (Gmsh) or .obj file".into()),
-    }
+    let parse = match ext.as_deref() {
+        Some("msh") => crate::mesh::gmsh::parse_msh,
+        Some("obj") => crate::mesh::obj::parse_obj,
+        _ => return Err("unknown mesh format: expected a .msh (Gmsh) or .obj file".into()),
+    };
+    let (bytes, file) = crate::mesh::MeshReadError::read(path).map_err(|e| e.to_string())?;
+    let mesh = parse(&bytes, &file).map_err(|e| e.to_string())?;
+    Ok((mesh, bytes))
 }
 
 fn select(

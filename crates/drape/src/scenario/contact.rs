@@ -2,6 +2,7 @@
 //! chosen by its `method` (each method's own struct, read by
 //! [`super::tagged`]); the contact model built from it and the obstacles.
 
+use super::InputFile;
 use super::check::Checker;
 use super::obstacle::build_body;
 use super::{Scenario, ScenarioError};
@@ -63,6 +64,7 @@ pub(super) fn build_contact(
     c: &Checker,
     s: &Scenario,
     base: &Path,
+    inputs: &mut Vec<InputFile>,
 ) -> Result<Option<ContactModel>, ScenarioError> {
     if s.obstacles.is_empty() {
         if s.contact.is_some() {
@@ -89,7 +91,7 @@ pub(super) fn build_contact(
         ContactSpec::Lagrange(_) => ContactMethod::Lagrange,
     };
     let bodies = (s.obstacles.iter().enumerate())
-        .map(|(i, o)| build_body(c, i, o, base))
+        .map(|(i, o)| build_body(c, i, o, base, inputs))
         .collect::<Result<_, _>>()?;
     Ok(Some(ContactModel { bodies, method }))
 }

@@ -25,7 +25,7 @@ mod locate;
 mod obstacle;
 mod tagged;
 
-pub use build::{Analysis, Monitor, Setup, fnv1a, read_mesh_file};
+pub use build::{Analysis, InputFile, Monitor, Setup, fnv1a, read_mesh_file};
 pub use contact::{ContactMethodName, ContactSpec, LagrangeSpec, PenaltySpec};
 pub use obstacle::{
     BoxObstacleSpec, CylinderObstacleSpec, MeshObstacleSpec, ObstacleShape, ObstacleSpec,

@@ -2,10 +2,11 @@
 //! (each shape's own struct, read by [`super::tagged`]), and its
 //! construction.
 
-use super::ScenarioError;
 use super::check::Checker;
+use super::{InputFile, ScenarioError};
 use crate::contact::obstacle::{
-    BoxObstacle, CylinderObstacle, PlaneObstacle, Rounded, SphereObstacle, read_mesh_obstacle,
+    BoxObstacle, CylinderObstacle, PlaneObstacle, Rounded, SphereObstacle,
+    read_mesh_obstacle_with_bytes,
 };
 use crate::contact::{Obstacle, ObstacleError, RigidBody};
 use serde::Deserialize;
@@ -155,12 +156,13 @@ impl ObstacleSpec {
 }
 
 /// The rigid body of `[[obstacle]]` number `i`; a mesh's path is relative
-/// to `base`.
+/// to `base`, and the file is recorded in `inputs`.
 pub(super) fn build_body(
     c: &Checker,
     i: usize,
     spec: &ObstacleSpec,
     base: &Path,
+    inputs: &mut Vec<InputFile>,
 ) -> Result<RigidBody, ScenarioError> {
     let (t, ix) = ("obstacle", Some(i));
     // The error's own key when it names one (a zero axis, a NaN centre),
@@ -207,7 +209,11 @@ pub(super) fn build_body(
             }
         }
         ObstacleSpec::Mesh(o) => {
-            Box::new(read_mesh_obstacle(&base.join(&o.path)).map_err(|e| invalid("path", e))?)
+            let path = base.join(&o.path);
+            let (mesh, bytes) =
+                read_mesh_obstacle_with_bytes(&path).map_err(|e| invalid("path", e))?;
+            inputs.push(InputFile::new(format!("obstacle[{i}].path"), &path, &bytes));
+            Box::new(mesh)
         }
     };
     let velocity = spec.velocity().unwrap_or([0.0; 3]);

@@ -1,10 +1,12 @@
 //! Checkpoints: the full state of a run in a versioned binary file, to
 //! resume from (`drape run --resume DIR`).
 //!
-//! Format (little-endian), version 3:
+//! Format (little-endian), version 4:
 //!
 //! ```text
-//! magic "DRAPECKP" · version u32 · scenario hash u64 · dofs u64 · nodes u64 · bodies u64
+//! magic "DRAPECKP" · version u32 · scenario hash u64
+//! input files u64, then each: key (u32 length, UTF-8), path (u32 length, bytes), FNV-1a of its bytes u64
+//! dofs u64 · nodes u64 · bodies u64
 //! counters: scheduled steps done, converged steps, Newton iterations, cut-back steps (u64 each),
 //!           first contact time f64 (NaN: none), last strain energy f64,
 //!           steps since the last frame u64, step of the last frame u64, wall seconds f64,
@@ -18,22 +20,42 @@
 //! FNV-1a of everything before, u64
 //! ```
 //!
-//! Version 1 (drape before the predictor carried the persistence) is read
-//! too, without the persistence: it resumes with 1, the predictor it had.
-//! Versions 1 and 2 (drape before adaptive steps and the rest criterion)
-//! have no segment, step size and still steps: they resume with 0 for each
-//! (a fixed schedule's values; adaptive runs did not exist).
+//! The input files are those the scenario reads (its mesh, its obstacles'
+//! meshes, [`Setup::inputs`]): a resume refuses one whose bytes have
+//! changed, naming it. A path is kept as the bytes of the operating
+//! system's string (Unix), so that any path survives.
 //!
-//! Every count is checked against the model before anything is allocated,
-//! and the trailing hash rejects a truncated or damaged file.
+//! Version 3 (drape before the input files were recorded) is read too,
+//! without them: it resumes as before, without checking the files.
+//! Version 1 (drape before the predictor carried the persistence) resumes
+//! with the persistence 1, the predictor it had. Versions 1 and 2 (drape
+//! before adaptive steps and the rest criterion) have no segment, step
+//! size and still steps: they resume with 0 for each (a fixed schedule's
+//! values; adaptive runs did not exist).
+//!
+//! The trailing hash rejects a truncated or damaged file; it proves the
+//! file's integrity, not its sense, so every value is checked too, and a
+//! value that is wrong is refused by its field's name: every count against
+//! the model before anything is allocated, the counters against each
+//! other, the state's numbers finite, the frames in step order and ending
+//! at the last frame's step; and, against the scenario
+//! ([`Checkpoint::read`]), the counters within its schedule.
 
 use crate::contact::ContactState;
+use crate::contact::lagrange::MAX_ACTIVE_SET_ROUNDS;
 use crate::integrator::State;
-use crate::scenario::fnv1a;
+use crate::scenario::{Analysis, InputFile, Setup, fnv1a};
 use crate::simulation::schedule::REST_STEPS;
+use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"DRAPECKP";
-const VERSION: u32 = 3;
+const VERSION: u32 = 4;
+
+/// Longest key of an input file (bytes).
+const MAX_KEY_BYTES: usize = 256;
+
+/// Longest path of an input file (bytes).
+const MAX_PATH_BYTES: usize = 1 << 20;
 
 /// The run's counters at a checkpoint.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -73,6 +95,10 @@ pub struct Counters {
 pub struct Checkpoint {
     /// Hash of the scenario text the run was started with.
     pub scenario_hash: u64,
+    /// The files the scenario read, with the hashes of their bytes
+    /// ([`Setup::inputs`]); `None` in a checkpoint of version 3 or older,
+    /// which did not record them (written as an empty list).
+    pub inputs: Option<Vec<InputFile>>,
     /// Counters.
     pub counters: Counters,
     /// The integrator's state.
@@ -91,7 +117,8 @@ pub enum CheckpointError {
     /// Reading failed.
     #[error("cannot read the checkpoint: {0}")]
     Io(#[from] std::io::Error),
-    /// Not a checkpoint, another version, damaged or truncated.
+    /// Not a checkpoint, another version, damaged or truncated, or a value
+    /// that cannot be (the message names the field).
     #[error("the checkpoint is unusable: {0}")]
     Invalid(String),
     /// The scenario has changed since the checkpoint was written.
@@ -104,10 +131,62 @@ pub enum CheckpointError {
         /// The scenario's now.
         found: u64,
     },
+    /// An input file (the mesh, an obstacle's mesh) has changed since the
+    /// checkpoint was written.
+    #[error(
+        "the input file {path} ({key}) has changed since the checkpoint was written{moved}: resuming would go on with other inputs than the run started with. Restore the file as it was, or start a fresh run (without --resume)",
+        path = path.display(),
+        moved = moved_from(path, recorded)
+    )]
+    InputChanged {
+        /// The scenario key naming the file (`mesh.path`, `obstacle[1].path`).
+        key: String,
+        /// The file as the scenario names it now.
+        path: PathBuf,
+        /// The file as the checkpoint recorded it.
+        recorded: PathBuf,
+    },
+    /// An input file the checkpoint recorded cannot be read any more.
+    #[error(
+        "the input file {path} ({key}) recorded in the checkpoint cannot be read ({error}): restore it as it was, or start a fresh run (without --resume)",
+        path = path.display()
+    )]
+    InputMissing {
+        /// The scenario key naming the file.
+        key: String,
+        /// The file as the checkpoint recorded it.
+        path: PathBuf,
+        /// Why it cannot be read.
+        error: std::io::Error,
+    },
+}
+
+/// ` (the checkpoint recorded it as ...)` when the recorded path differs.
+fn moved_from(path: &Path, recorded: &Path) -> String {
+    if path == recorded {
+        String::new()
+    } else {
+        format!(" (the checkpoint recorded it as {})", recorded.display())
+    }
+}
+
+fn invalid(message: String) -> CheckpointError {
+    CheckpointError::Invalid(message)
+}
+
+/// What a checkpoint must fit when it is read.
+struct Expected<'a> {
+    dofs: usize,
+    bodies: usize,
+    scenario_hash: u64,
+    /// The scenario's input files now, to compare with the recorded ones
+    /// (`None`: not compared).
+    inputs: Option<&'a [InputFile]>,
 }
 
 impl Checkpoint {
-    /// Serialises the checkpoint.
+    /// Serialises the checkpoint (as version 4; `inputs: None` as an empty
+    /// list).
     pub fn to_bytes(&self) -> Vec<u8> {
         let s = &self.state;
         let dofs = s.positions.len();
@@ -119,7 +198,17 @@ impl Checkpoint {
         let mut b = Vec::with_capacity(64 + 8 * 6 * dofs);
         b.extend_from_slice(MAGIC);
         b.extend_from_slice(&VERSION.to_le_bytes());
-        for v in [self.scenario_hash, dofs as u64, nodes as u64, bodies as u64] {
+        b.extend_from_slice(&self.scenario_hash.to_le_bytes());
+        let inputs = self.inputs.as_deref().unwrap_or_default();
+        b.extend_from_slice(&(inputs.len() as u64).to_le_bytes());
+        for input in inputs {
+            for bytes in [input.key.as_bytes(), &path_to_bytes(&input.path)] {
+                b.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
+                b.extend_from_slice(bytes);
+            }
+            b.extend_from_slice(&input.hash.to_le_bytes());
+        }
+        for v in [dofs as u64, nodes as u64, bodies as u64] {
             b.extend_from_slice(&v.to_le_bytes());
         }
         let c = &self.counters;
@@ -174,117 +263,149 @@ impl Checkpoint {
         b
     }
 
+    /// Reads a checkpoint to resume `setup` from: written by the same
+    /// scenario text, from input files with the same bytes (when the
+    /// checkpoint recorded them: version 4), for its model's sizes, with
+    /// every value sound and its counters within the scenario's schedule.
+    pub fn read(bytes: &[u8], setup: &Setup) -> Result<Self, CheckpointError> {
+        let model = &setup.model;
+        let expected = Expected {
+            dofs: model.dofs(),
+            bodies: model.contact.as_ref().map_or(0, |c| c.bodies.len()),
+            scenario_hash: setup.scenario_hash,
+            inputs: Some(&setup.inputs),
+        };
+        let ck = Self::parse(bytes, &expected)?;
+        ck.fits(setup)?;
+        Ok(ck)
+    }
+
     /// Reads a checkpoint written for a model of `dofs` unknowns and
-    /// `bodies` obstacles, by the scenario whose hash is `scenario_hash`.
+    /// `bodies` obstacles, by the scenario whose hash is `scenario_hash`,
+    /// and checks its values against each other (not the input files, nor
+    /// the schedule: see [`Checkpoint::read`]).
     pub fn from_bytes(
         bytes: &[u8],
         dofs: usize,
         bodies: usize,
         scenario_hash: u64,
     ) -> Result<Self, CheckpointError> {
-        let bad = |m: &str| CheckpointError::Invalid(m.to_string());
-        if bytes.len() < 8 + 4 + 32 + 8 || &bytes[..8] != MAGIC {
-            return Err(bad("not a drape checkpoint"));
-        }
-        let (body, tail) = bytes.split_at(bytes.len() - 8);
-        let stored = u64::from_le_bytes(tail.try_into().map_err(|_| bad("truncated"))?);
-        if fnv1a(body) != stored {
-            return Err(bad("damaged or truncated (its checksum does not match)"));
-        }
-        let mut r = Reader { bytes: body, at: 8 };
-        let version = r.u32()?;
-        if !(1..=VERSION).contains(&version) {
-            return Err(bad(&format!(
-                "version {version}, this drape reads versions 1 to {VERSION}"
+        let expected = Expected {
+            dofs,
+            bodies,
+            scenario_hash,
+            inputs: None,
+        };
+        Self::parse(bytes, &expected)
+    }
+
+    /// The input files a checkpoint recorded, read from its header alone
+    /// (before any scenario is built): `None` for a version that did not
+    /// record them.
+    pub fn recorded_inputs(bytes: &[u8]) -> Result<Option<Vec<InputFile>>, CheckpointError> {
+        let (mut r, version) = open(bytes)?;
+        r.u64("scenario hash")?;
+        let most = r.remaining() / 16;
+        read_inputs(&mut r, version, most)
+    }
+
+    /// Compares the recorded input files with the scenario's `current`
+    /// ones, in order: the first whose bytes differ is refused by name.
+    fn check_inputs(recorded: &[InputFile], current: &[InputFile]) -> Result<(), CheckpointError> {
+        let keys = |list: &[InputFile]| list.iter().map(|i| i.key.clone()).collect::<Vec<_>>();
+        if keys(recorded) != keys(current) {
+            return Err(invalid(format!(
+                "input files {:?}, the scenario reads {:?}",
+                keys(recorded),
+                keys(current)
             )));
         }
-        let hash = r.u64()?;
-        if hash != scenario_hash {
+        match recorded.iter().zip(current).find(|(r, c)| r.hash != c.hash) {
+            Some((r, c)) => Err(CheckpointError::InputChanged {
+                key: c.key.clone(),
+                path: c.path.clone(),
+                recorded: r.path.clone(),
+            }),
+            None => Ok(()),
+        }
+    }
+
+    fn parse(bytes: &[u8], expected: &Expected) -> Result<Self, CheckpointError> {
+        let (mut r, version) = open(bytes)?;
+        let hash = r.u64("scenario hash")?;
+        if hash != expected.scenario_hash {
             return Err(CheckpointError::ScenarioChanged {
                 expected: hash,
-                found: scenario_hash,
+                found: expected.scenario_hash,
             });
         }
-        let (d, nodes, b) = (r.usize()?, r.usize()?, r.usize()?);
-        if d != dofs || nodes * 3 != dofs || b != bodies {
-            return Err(bad(&format!(
+        // The mesh and one file per obstacle at most.
+        let inputs = read_inputs(&mut r, version, expected.bodies + 1)?;
+        if let (Some(recorded), Some(current)) = (&inputs, expected.inputs) {
+            Self::check_inputs(recorded, current)?;
+        }
+        let (dofs, bodies) = (expected.dofs, expected.bodies);
+        let (d, nodes, b) = (r.usize("dofs")?, r.usize("nodes")?, r.usize("bodies")?);
+        if d != dofs || nodes.checked_mul(3) != Some(dofs) || b != bodies {
+            return Err(invalid(format!(
                 "written for {d} unknowns and {b} obstacles, the scenario has {dofs} and {bodies}"
             )));
         }
         let mut counters = Counters {
-            scheduled_done: r.usize()?,
-            step: r.usize()?,
-            iterations: r.usize()?,
-            cutback_steps: r.usize()?,
-            first_contact_time: Some(r.f64()?).filter(|t| !t.is_nan()),
-            last_strain: r.f64()?,
-            since_frame: r.usize()?,
-            last_written: r.usize()?,
-            wall_seconds: r.f64()?,
+            scheduled_done: r.usize("scheduled steps done")?,
+            step: r.usize("converged steps")?,
+            iterations: r.usize("Newton iterations")?,
+            cutback_steps: r.usize("cut-back steps")?,
+            first_contact_time: Some(r.f64("first contact time")?).filter(|t| !t.is_nan()),
+            last_strain: r.f64("last strain energy")?,
+            since_frame: r.usize("steps since the last frame")?,
+            last_written: r.usize("step of the last frame")?,
+            wall_seconds: r.f64("wall seconds")?,
             ..Counters::default()
         };
         if version >= 3 {
-            counters.segment = r.usize()?;
-            counters.step_size = r.f64()?;
-            counters.still_steps = r.usize()?;
+            counters.segment = r.usize("segment")?;
+            counters.step_size = r.f64("step size")?;
+            counters.still_steps = r.usize("still steps")?;
         }
-        if !(counters.step_size.is_finite() && counters.step_size >= 0.0) {
-            return Err(bad(&format!(
-                "step size {} is not a finite size >= 0",
-                counters.step_size
-            )));
-        }
-        if counters.still_steps >= REST_STEPS {
-            return Err(bad(&format!(
-                "still steps {} not below {REST_STEPS} (the run would have ended at rest)",
-                counters.still_steps
-            )));
-        }
-        let time = r.f64()?;
-        let external_work = r.f64()?;
-        let persistence = if version >= 2 { r.f64()? } else { 1.0 };
-        if !(0.0..=1.0).contains(&persistence) {
-            return Err(bad(&format!(
-                "acceleration persistence {persistence} outside [0, 1]"
-            )));
-        }
-        let positions = r.f64s(dofs)?;
-        let velocities = r.f64s(dofs)?;
-        let accelerations = r.f64s(dofs)?;
-        let external_forces = r.f64s(dofs)?;
-        let contact = match r.u8()? {
-            0 => None,
-            1 => {
-                let hints = (0..nodes * bodies)
-                    .map(|_| r.u32())
-                    .collect::<Result<_, _>>()?;
-                let active = (0..nodes)
-                    .map(|_| {
-                        let (k, f) = (r.u32()?, r.u32()?);
-                        Ok((k != u32::MAX).then_some((k, f)))
-                    })
-                    .collect::<Result<_, CheckpointError>>()?;
-                let multipliers = r.f64s(nodes)?;
-                Some(ContactState {
-                    hints,
-                    active,
-                    multipliers,
-                })
-            }
-            _ => return Err(bad("bad contact flag")),
+        let time = r.f64("time")?;
+        let external_work = r.f64("external work")?;
+        let persistence = if version >= 2 {
+            r.f64("acceleration persistence")?
+        } else {
+            1.0
         };
-        let count = r.usize()?;
-        if count > r.remaining() / 16 {
-            return Err(bad("frame count beyond the file"));
+        let positions = r.f64s(dofs, "positions")?;
+        let velocities = r.f64s(dofs, "velocities")?;
+        let accelerations = r.f64s(dofs, "accelerations")?;
+        let external_forces = r.f64s(dofs, "external forces")?;
+        let contact = match r.u8("contact flag")? {
+            0 if bodies > 0 => {
+                return Err(invalid(format!(
+                    "contact flag 0 (no contact state), but the scenario has {bodies} obstacles"
+                )));
+            }
+            0 => None,
+            1 => Some(read_contact(&mut r, nodes, bodies)?),
+            flag => return Err(invalid(format!("contact flag {flag} is neither 0 nor 1"))),
+        };
+        let count = r.usize("frame count")?;
+        // One frame per step at most, the initial one included.
+        if count > r.remaining() / 16 || count > counters.step.saturating_add(1) {
+            return Err(invalid(format!(
+                "frame count {count} beyond the file or the {} converged steps",
+                counters.step
+            )));
         }
         let frames = (0..count)
-            .map(|_| Ok((r.f64()?, r.usize()?)))
+            .map(|_| Ok((r.f64("frame time")?, r.usize("frame step")?)))
             .collect::<Result<_, CheckpointError>>()?;
         if r.remaining() != 0 {
-            return Err(bad("trailing bytes"));
+            return Err(invalid(format!("{} trailing bytes", r.remaining())));
         }
-        Ok(Self {
+        let ck = Self {
             scenario_hash: hash,
+            inputs,
             counters,
             state: State {
                 time,
@@ -297,8 +418,356 @@ impl Checkpoint {
             },
             external_forces,
             frames,
-        })
+        };
+        ck.check_values()?;
+        Ok(ck)
     }
+
+    /// The values against each other: what a run can have written.
+    fn check_values(&self) -> Result<(), CheckpointError> {
+        let c = &self.counters;
+        let s = &self.state;
+        let refuse = |ok: bool, message: String| if ok { Ok(()) } else { Err(invalid(message)) };
+        refuse(
+            c.step_size.is_finite() && c.step_size >= 0.0,
+            format!("step size {} is not a finite size >= 0", c.step_size),
+        )?;
+        refuse(
+            c.still_steps < REST_STEPS,
+            format!(
+                "still steps {} not below {REST_STEPS} (the run would have ended at rest)",
+                c.still_steps
+            ),
+        )?;
+        refuse(
+            (0.0..=1.0).contains(&s.persistence),
+            format!("acceleration persistence {} outside [0, 1]", s.persistence),
+        )?;
+        refuse(
+            s.time.is_finite() && s.time >= 0.0,
+            format!("time {} is not a finite time >= 0", s.time),
+        )?;
+        let steps = c.step;
+        for (name, value) in [
+            ("scheduled steps done", c.scheduled_done),
+            ("cut-back steps", c.cutback_steps),
+            ("still steps", c.still_steps),
+            ("step of the last frame", c.last_written),
+        ] {
+            refuse(
+                value <= steps,
+                format!("{name} {value} more than the {steps} converged steps"),
+            )?;
+        }
+        refuse(
+            c.since_frame == steps - c.last_written,
+            format!(
+                "steps since the last frame {} is not the converged steps {steps} less the step of the last frame {}",
+                c.since_frame, c.last_written
+            ),
+        )?;
+        if let Some(t) = c.first_contact_time {
+            refuse(
+                t.is_finite() && (0.0..=s.time).contains(&t),
+                format!("first contact time {t} outside [0, {}] (the time)", s.time),
+            )?;
+        }
+        for (name, value) in [
+            ("last strain energy", c.last_strain),
+            ("external work", s.external_work),
+        ] {
+            refuse(value.is_finite(), format!("{name} {value} is not finite"))?;
+        }
+        refuse(
+            c.wall_seconds.is_finite() && c.wall_seconds >= 0.0,
+            format!("wall seconds {} is not a finite time >= 0", c.wall_seconds),
+        )?;
+        for (name, values) in [
+            ("positions", &s.positions),
+            ("velocities", &s.velocities),
+            ("accelerations", &s.accelerations),
+            ("external forces", &self.external_forces),
+        ] {
+            if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+                return Err(invalid(format!("{name}[{i}] {} is not finite", values[i])));
+            }
+        }
+        if let Some(cs) = &s.contact
+            && let Some(p) = cs
+                .multipliers
+                .iter()
+                .position(|m| !(m.is_finite() && *m >= 0.0))
+        {
+            return Err(invalid(format!(
+                "multipliers[{p}] {} is not a finite force >= 0",
+                cs.multipliers[p]
+            )));
+        }
+        // The frames: the initial one first, then in step order, at the
+        // times of their steps, the last one at the last frame's step.
+        match self.frames.first() {
+            Some(&(t, 0)) if t.is_finite() && t >= 0.0 => {}
+            first => {
+                return Err(invalid(format!(
+                    "frames[0] {first:?} is not the initial frame (a time >= 0, step 0)"
+                )));
+            }
+        }
+        for (i, pair) in self.frames.windows(2).enumerate() {
+            let ((t0, k0), (t1, k1)) = (pair[0], pair[1]);
+            refuse(
+                k1 > k0 && t1.is_finite() && t1 >= t0 && t1 <= s.time,
+                format!(
+                    "frames[{}] (time {t1}, step {k1}) does not follow frames[{i}] (time {t0}, step {k0}) within the time {}",
+                    i + 1,
+                    s.time
+                ),
+            )?;
+        }
+        let last = self.frames.last().map_or(0, |f| f.1);
+        refuse(
+            last == c.last_written,
+            format!(
+                "step of the last frame {} is not the last listed frame's step {last}",
+                c.last_written
+            ),
+        )
+    }
+
+    /// The counters against the scenario's schedule: the position in it,
+    /// the converged steps and Newton iterations it allows, the time.
+    fn fits(&self, setup: &Setup) -> Result<(), CheckpointError> {
+        let c = &self.counters;
+        let time = self.state.time;
+        let refuse = |ok: bool, message: String| if ok { Ok(()) } else { Err(invalid(message)) };
+        let segments: Vec<(usize, f64)> = match &setup.analysis {
+            Analysis::Dynamic { segments, .. } => segments.clone(),
+            Analysis::Static { steps } => vec![(*steps, 1.0 / *steps as f64)],
+        };
+        let end_time: f64 = segments.iter().map(|(n, dt)| *n as f64 * dt).sum();
+        // Times are sums of steps: round-off, relative to the schedule.
+        let slack = 1e-9 * end_time;
+        let halvings = setup.max_cutbacks.min(1000);
+        refuse(
+            time <= end_time + slack,
+            format!("time {time} beyond the schedule's end {end_time}"),
+        )?;
+        // Adaptive steps as the run loop has them (never in statics).
+        let adaptive =
+            setup.adaptive.is_some() && matches!(setup.analysis, Analysis::Dynamic { .. });
+        if adaptive {
+            refuse(
+                c.scheduled_done == 0,
+                format!(
+                    "scheduled steps done {} with adaptive steps (always 0)",
+                    c.scheduled_done
+                ),
+            )?;
+            // A segment's steps are at least half its floor, dt / 2^halvings,
+            // but its last one; twice that many with a margin.
+            let most: f64 = segments
+                .iter()
+                .map(|(n, _)| 4.0 * *n as f64 * 2f64.powi(halvings as i32) + 2.0)
+                .sum();
+            refuse(
+                (c.step as f64) <= most,
+                format!(
+                    "converged steps {} more than the schedule's adaptive steps allow ({most:.0})",
+                    c.step
+                ),
+            )?;
+            // The segment's own check is the step controller's; here its
+            // span of time.
+            let mut start = 0.0;
+            for (k, (n, dt)) in segments.iter().enumerate() {
+                let end = start + *n as f64 * dt;
+                if k == c.segment {
+                    refuse(
+                        time >= start - slack && time <= end + slack,
+                        format!("time {time} outside segment {k}'s [{start}, {end}] s"),
+                    )?;
+                }
+                start = end;
+            }
+        } else {
+            let total: usize = segments.iter().map(|(n, _)| n).sum();
+            refuse(
+                c.scheduled_done <= total,
+                format!(
+                    "scheduled steps done {} beyond the schedule's {total}",
+                    c.scheduled_done
+                ),
+            )?;
+            let per_step = 1usize.checked_shl(halvings as u32).unwrap_or(usize::MAX);
+            refuse(
+                c.step >= c.scheduled_done && c.step <= c.scheduled_done.saturating_mul(per_step),
+                format!(
+                    "converged steps {} do not fit {} scheduled steps done (each 1 to 2^{halvings} steps)",
+                    c.step, c.scheduled_done
+                ),
+            )?;
+            refuse(
+                c.segment == 0,
+                format!("segment {} with fixed steps (always 0)", c.segment),
+            )?;
+            refuse(
+                c.step_size == 0.0,
+                format!("step size {} with fixed steps (always 0)", c.step_size),
+            )?;
+            // The time the scheduled steps done reach.
+            let mut left = c.scheduled_done;
+            let mut reached = 0.0;
+            for (n, dt) in &segments {
+                let k = left.min(*n);
+                reached += k as f64 * dt;
+                left -= k;
+            }
+            refuse(
+                (time - reached).abs() <= 1e-6 * end_time,
+                format!(
+                    "time {time} is not where {} scheduled steps end ({reached})",
+                    c.scheduled_done
+                ),
+            )?;
+        }
+        if setup.rest.is_none() {
+            refuse(
+                c.still_steps == 0,
+                format!(
+                    "still steps {} without a rest criterion (always 0)",
+                    c.still_steps
+                ),
+            )?;
+        }
+        refuse(
+            c.since_frame < setup.output_every,
+            format!(
+                "steps since the last frame {} not below the frame interval {}",
+                c.since_frame, setup.output_every
+            ),
+        )?;
+        let most = c
+            .step
+            .saturating_mul(setup.newton.max_iterations)
+            .saturating_mul(MAX_ACTIVE_SET_ROUNDS + 1);
+        refuse(
+            c.iterations <= most,
+            format!(
+                "Newton iterations {} more than {} converged steps allow ({most})",
+                c.iterations, c.step
+            ),
+        )
+    }
+}
+
+/// Checks the magic, the checksum and the version: the reader after the
+/// version, and the version.
+fn open(bytes: &[u8]) -> Result<(Reader<'_>, u32), CheckpointError> {
+    if bytes.len() < 8 + 4 + 8 + 8 || &bytes[..8] != MAGIC {
+        return Err(invalid("not a drape checkpoint".into()));
+    }
+    let (body, tail) = bytes.split_at(bytes.len() - 8);
+    let stored = u64::from_le_bytes(tail.try_into().expect("8 bytes"));
+    if fnv1a(body) != stored {
+        return Err(invalid(format!(
+            "damaged or truncated (its checksum does not match; {} bytes)",
+            bytes.len()
+        )));
+    }
+    let mut r = Reader { bytes: body, at: 8 };
+    let version = r.u32("version")?;
+    if !(1..=VERSION).contains(&version) {
+        return Err(invalid(format!(
+            "version {version}, this drape reads versions 1 to {VERSION}"
+        )));
+    }
+    Ok((r, version))
+}
+
+/// The input files of a version 4 file, at most `most` of them.
+fn read_inputs(
+    r: &mut Reader,
+    version: u32,
+    most: usize,
+) -> Result<Option<Vec<InputFile>>, CheckpointError> {
+    if version < 4 {
+        return Ok(None);
+    }
+    let count = r.usize("input files")?;
+    if count > most {
+        return Err(invalid(format!(
+            "input files {count}, more than the {most} the scenario can have"
+        )));
+    }
+    let mut inputs = Vec::with_capacity(count);
+    for i in 0..count {
+        let key = r.bytes(MAX_KEY_BYTES, &format!("input files[{i}] key"))?;
+        let key = String::from_utf8(key.to_vec())
+            .map_err(|_| invalid(format!("input files[{i}] key is not UTF-8")))?;
+        let path = path_from_bytes(r.bytes(MAX_PATH_BYTES, &format!("input files[{i}] path"))?);
+        let hash = r.u64(&format!("input files[{i}] hash"))?;
+        inputs.push(InputFile { key, path, hash });
+    }
+    Ok(Some(inputs))
+}
+
+/// The contact state of `nodes` nodes and `bodies` obstacles.
+fn read_contact(
+    r: &mut Reader,
+    nodes: usize,
+    bodies: usize,
+) -> Result<ContactState, CheckpointError> {
+    let count = nodes
+        .checked_mul(bodies)
+        .filter(|&n| n <= r.remaining() / 4)
+        .ok_or_else(|| invalid("truncated in contact hints".into()))?;
+    // A hint that names no feature of its obstacle is ignored by it.
+    let hints = (0..count)
+        .map(|_| r.u32("contact hints"))
+        .collect::<Result<_, _>>()?;
+    if nodes > r.remaining() / 8 {
+        return Err(invalid("truncated in held nodes".into()));
+    }
+    let active = (0..nodes)
+        .map(|p| {
+            let (k, f) = (r.u32("held body")?, r.u32("held feature")?);
+            match (k, f) {
+                (u32::MAX, u32::MAX) => Ok(None),
+                (k, f) if (k as usize) < bodies && f != u32::MAX => Ok(Some((k, f))),
+                _ => Err(invalid(format!(
+                    "held[{p}] (body {k}, feature {f}) names no obstacle of the {bodies}"
+                ))),
+            }
+        })
+        .collect::<Result<_, CheckpointError>>()?;
+    let multipliers = r.f64s(nodes, "multipliers")?;
+    Ok(ContactState {
+        hints,
+        active,
+        multipliers,
+    })
+}
+
+#[cfg(unix)]
+fn path_to_bytes(path: &Path) -> Vec<u8> {
+    use std::os::unix::ffi::OsStrExt;
+    path.as_os_str().as_bytes().to_vec()
+}
+
+#[cfg(not(unix))]
+fn path_to_bytes(path: &Path) -> Vec<u8> {
+    path.to_string_lossy().into_owned().into_bytes()
+}
+
+#[cfg(unix)]
+fn path_from_bytes(bytes: &[u8]) -> PathBuf {
+    use std::os::unix::ffi::OsStrExt;
+    std::ffi::OsStr::from_bytes(bytes).into()
+}
+
+#[cfg(not(unix))]
+fn path_from_bytes(bytes: &[u8]) -> PathBuf {
+    String::from_utf8_lossy(bytes).into_owned().into()
 }
 
 struct Reader<'a> {
@@ -307,9 +776,10 @@ struct Reader<'a> {
 }
 
 impl Reader<'_> {
-    fn take(&mut self, n: usize) -> Result<&[u8], CheckpointError> {
+    /// The next `n` bytes, which hold `field`.
+    fn take(&mut self, n: usize, field: &str) -> Result<&[u8], CheckpointError> {
         let end = self.at.checked_add(n).filter(|&e| e <= self.bytes.len());
-        let end = end.ok_or_else(|| CheckpointError::Invalid("truncated".into()))?;
+        let end = end.ok_or_else(|| invalid(format!("truncated in {field}")))?;
         let s = &self.bytes[self.at..end];
         self.at = end;
         Ok(s)
@@ -317,32 +787,41 @@ impl Reader<'_> {
     fn remaining(&self) -> usize {
         self.bytes.len() - self.at
     }
-    fn u8(&mut self) -> Result<u8, CheckpointError> {
-        Ok(self.take(1)?[0])
+    fn u8(&mut self, field: &str) -> Result<u8, CheckpointError> {
+        Ok(self.take(1, field)?[0])
     }
-    fn u32(&mut self) -> Result<u32, CheckpointError> {
+    fn u32(&mut self, field: &str) -> Result<u32, CheckpointError> {
         Ok(u32::from_le_bytes(
-            self.take(4)?.try_into().expect("4 bytes"),
+            self.take(4, field)?.try_into().expect("4 bytes"),
         ))
     }
-    fn u64(&mut self) -> Result<u64, CheckpointError> {
+    fn u64(&mut self, field: &str) -> Result<u64, CheckpointError> {
         Ok(u64::from_le_bytes(
-            self.take(8)?.try_into().expect("8 bytes"),
+            self.take(8, field)?.try_into().expect("8 bytes"),
         ))
     }
-    fn usize(&mut self) -> Result<usize, CheckpointError> {
-        usize::try_from(self.u64()?).map_err(|_| CheckpointError::Invalid("count too large".into()))
+    fn usize(&mut self, field: &str) -> Result<usize, CheckpointError> {
+        let v = self.u64(field)?;
+        usize::try_from(v).map_err(|_| invalid(format!("{field} {v} too large")))
     }
-    fn f64(&mut self) -> Result<f64, CheckpointError> {
+    fn f64(&mut self, field: &str) -> Result<f64, CheckpointError> {
         Ok(f64::from_le_bytes(
-            self.take(8)?.try_into().expect("8 bytes"),
+            self.take(8, field)?.try_into().expect("8 bytes"),
         ))
     }
-    fn f64s(&mut self, n: usize) -> Result<Vec<f64>, CheckpointError> {
+    fn f64s(&mut self, n: usize, field: &str) -> Result<Vec<f64>, CheckpointError> {
         if n > self.remaining() / 8 {
-            return Err(CheckpointError::Invalid("truncated".into()));
+            return Err(invalid(format!("truncated in {field}")));
         }
-        (0..n).map(|_| self.f64()).collect()
+        (0..n).map(|_| self.f64(field)).collect()
+    }
+    /// A length (u32, at most `most`) and that many bytes.
+    fn bytes(&mut self, most: usize, field: &str) -> Result<&[u8], CheckpointError> {
+        let n = self.u32(field)? as usize;
+        if n > most {
+            return Err(invalid(format!("{field} of {n} bytes, more than {most}")));
+        }
+        self.take(n, field)
     }
 }
 
@@ -355,6 +834,11 @@ mod tests {
         let v = |k: f64| (0..n).map(|i| k + i as f64 * 0.1).collect::<Vec<f64>>();
         Checkpoint {
             scenario_hash: 0xdead_beef,
+            inputs: Some(vec![InputFile {
+                key: "mesh.path".into(),
+                path: PathBuf::from("/tmp/some where/plate.msh"),
+                hash: 0x1234_5678_9abc_def0,
+            }]),
             counters: Counters {
                 scheduled_done: 7,
                 step: 9,
@@ -383,8 +867,12 @@ mod tests {
                 }),
             },
             external_forces: v(4.0),
-            frames: vec![(0.0, 0), (0.2, 5)],
+            frames: vec![(0.0, 0), (0.2, 7)],
         }
+    }
+
+    fn bodies(c: &Checkpoint) -> usize {
+        usize::from(c.state.contact.is_some()) * 2
     }
 
     #[test]
@@ -392,10 +880,14 @@ mod tests {
         for contact in [false, true] {
             let c = sample(contact);
             let bytes = c.to_bytes();
-            let bodies = usize::from(contact) * 2;
+            let bodies = bodies(&c);
             assert_eq!(
                 Checkpoint::from_bytes(&bytes, 6, bodies, 0xdead_beef).unwrap(),
                 c
+            );
+            assert_eq!(
+                Checkpoint::recorded_inputs(&bytes).unwrap(),
+                c.inputs.clone()
             );
             assert!(matches!(
                 Checkpoint::from_bytes(&bytes, 6, bodies, 1),
@@ -403,12 +895,30 @@ mod tests {
             ));
             assert!(Checkpoint::from_bytes(&bytes, 9, bodies, 0xdead_beef).is_err());
             for cut in [0, 10, bytes.len() / 2, bytes.len() - 1] {
-                assert!(Checkpoint::from_bytes(&bytes[..cut], 6, bodies, 0xdead_beef).is_err());
+                let e = Checkpoint::from_bytes(&bytes[..cut], 6, bodies, 0xdead_beef).unwrap_err();
+                let says = if cut < 28 {
+                    "not a drape checkpoint"
+                } else {
+                    "damaged or truncated"
+                };
+                assert!(e.to_string().contains(says), "{cut}: {e}");
             }
             let mut flipped = bytes.clone();
             flipped[40] ^= 1;
             assert!(Checkpoint::from_bytes(&flipped, 6, bodies, 0xdead_beef).is_err());
         }
+    }
+
+    /// A path that is not UTF-8 survives (Unix).
+    #[cfg(unix)]
+    #[test]
+    fn keeps_paths_as_bytes() {
+        use std::os::unix::ffi::OsStrExt;
+        let mut c = sample(false);
+        let path = PathBuf::from(std::ffi::OsStr::from_bytes(b"/tmp/caf\xe9/m.obj"));
+        c.inputs.as_mut().unwrap()[0].path = path.clone();
+        let back = Checkpoint::from_bytes(&c.to_bytes(), 6, 0, 0xdead_beef).unwrap();
+        assert_eq!(back.inputs.unwrap()[0].path, path);
     }
 
     /// Re-seals `body` (a file without its trailing hash) as `version`.
@@ -419,9 +929,27 @@ mod tests {
         body
     }
 
-    /// The same file as version 2 wrote it (without segment, step size and
-    /// still steps) or version 1 (without the persistence too).
+    /// The same file as version 3 wrote it (without the input files),
+    /// version 2 (without segment, step size and still steps too) or
+    /// version 1 (without the persistence too).
     fn as_version(bytes: &[u8], version: u32) -> Vec<u8> {
+        // Version 3: magic, version, scenario hash, then the sizes.
+        let inputs = 8 + 4 + 8;
+        let count = u64::from_le_bytes(bytes[inputs..inputs + 8].try_into().unwrap());
+        let mut at = inputs + 8;
+        for _ in 0..count {
+            for _ in 0..2 {
+                let n = u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+                at += 4 + n as usize;
+            }
+            at += 8;
+        }
+        let mut v3 = bytes[..inputs].to_vec();
+        v3.extend_from_slice(&bytes[at..]);
+        let bytes = &v3[..];
+        if version == 3 {
+            return seal(bytes[..bytes.len() - 8].to_vec(), 3);
+        }
         // magic, version, 4 header u64, 4 counters u64, 5 counter fields:
         // version 3's segment, step size and still steps follow; then
         // time and external work, and the persistence.
@@ -438,15 +966,22 @@ mod tests {
         seal(old, version)
     }
 
-    /// Versions 1 and 2 resume with 0 for the adaptive steps' segment and
-    /// step size and the rest criterion's still steps (a fixed schedule's
-    /// values), version 1 with the persistence 1 (the predictor it was
-    /// written with).
+    /// Version 3 resumes without input files (unchecked); versions 1 and 2
+    /// with 0 for the adaptive steps' segment and step size and the rest
+    /// criterion's still steps (a fixed schedule's values), version 1 with
+    /// the persistence 1 (the predictor it was written with).
     #[test]
-    fn reads_versions_1_and_2_with_defaults_for_the_new_fields() {
+    fn reads_versions_1_to_3_with_defaults_for_the_new_fields() {
         let c = sample(true);
         let bytes = c.to_bytes();
         let mut expected = c.clone();
+        expected.inputs = None;
+        let v3 = as_version(&bytes, 3);
+        assert_eq!(Checkpoint::recorded_inputs(&v3).unwrap(), None);
+        assert_eq!(
+            Checkpoint::from_bytes(&v3, 6, 2, 0xdead_beef).unwrap(),
+            expected
+        );
         expected.counters.segment = 0;
         expected.counters.step_size = 0.0;
         expected.counters.still_steps = 0;
@@ -457,32 +992,189 @@ mod tests {
         assert_eq!(v1, expected);
     }
 
-    /// Values out of range are refused naming the field: a persistence
-    /// outside [0, 1], a step size that is not finite or negative, still
-    /// steps that would have ended the run; and a version this drape does
-    /// not know.
+    /// Values out of range are refused naming the field, whatever their
+    /// checksum: each counter against the others, the state's numbers, the
+    /// contact state, the frames; and a version this drape does not know.
     #[test]
     fn refuses_values_out_of_range_and_unknown_versions() {
         let refused = |change: &dyn Fn(&mut Checkpoint), says: &str| {
             let mut bad = sample(true);
             change(&mut bad);
             let e = Checkpoint::from_bytes(&bad.to_bytes(), 6, 2, 0xdead_beef).unwrap_err();
-            assert!(e.to_string().contains(says), "{e}");
+            assert!(e.to_string().contains(says), "{says}: {e}");
         };
         refused(&|c| c.state.persistence = 1.5, "persistence 1.5");
         refused(&|c| c.counters.step_size = f64::NAN, "step size NaN");
         refused(&|c| c.counters.step_size = -1e-3, "step size -0.001");
         refused(&|c| c.counters.step_size = f64::INFINITY, "step size inf");
         refused(&|c| c.counters.still_steps = REST_STEPS, "still steps 10");
+        refused(
+            &|c| c.counters.step = usize::MAX,
+            "steps since the last frame 2 is not",
+        );
+        refused(
+            &|c| c.counters.scheduled_done = 10,
+            "scheduled steps done 10 more than the 9 converged steps",
+        );
+        refused(
+            &|c| c.counters.cutback_steps = 12,
+            "cut-back steps 12 more than",
+        );
+        refused(
+            &|c| c.counters.last_written = 8,
+            "steps since the last frame 2 is not",
+        );
+        refused(
+            &|c| {
+                c.counters.last_written = 8;
+                c.counters.since_frame = 1;
+            },
+            "step of the last frame 8 is not the last listed frame's step 7",
+        );
+        refused(&|c| c.state.time = f64::NAN, "time NaN");
+        refused(&|c| c.state.time = -1.0, "time -1");
+        refused(
+            &|c| c.counters.first_contact_time = Some(0.5),
+            "first contact time 0.5 outside [0, 0.3]",
+        );
+        refused(&|c| c.counters.wall_seconds = -2.0, "wall seconds -2");
+        refused(
+            &|c| c.counters.last_strain = f64::INFINITY,
+            "last strain energy inf",
+        );
+        refused(&|c| c.state.external_work = f64::NAN, "external work NaN");
+        refused(&|c| c.state.positions[4] = f64::NAN, "positions[4] NaN");
+        refused(
+            &|c| c.state.velocities[0] = f64::INFINITY,
+            "velocities[0] inf",
+        );
+        refused(&|c| c.state.accelerations[5] = f64::NAN, "accelerations[5]");
+        refused(&|c| c.external_forces[1] = f64::NAN, "external forces[1]");
+        let contact = |c: &mut Checkpoint| c.state.contact.as_mut().unwrap().clone();
+        refused(
+            &|c| {
+                let mut cs = contact(c);
+                cs.multipliers[1] = -1.0;
+                c.state.contact = Some(cs);
+            },
+            "multipliers[1] -1",
+        );
+        refused(
+            &|c| {
+                let mut cs = contact(c);
+                cs.active[1] = Some((2, 0));
+                c.state.contact = Some(cs);
+            },
+            "held[1] (body 2, feature 0) names no obstacle of the 2",
+        );
+        refused(&|c| c.frames = vec![], "frames[0] None");
+        refused(&|c| c.frames[0] = (0.0, 1), "frames[0] Some((0.0, 1))");
+        refused(
+            &|c| c.frames = vec![(0.0, 0), (0.2, 7), (0.1, 7)],
+            "frames[2] (time 0.1, step 7) does not follow frames[1]",
+        );
+        refused(
+            &|c| c.frames = vec![(0.0, 0), (0.4, 7)],
+            "frames[1] (time 0.4, step 7)",
+        );
+        refused(
+            &|c| c.frames = (0..=10).map(|k| (0.0, k)).collect(),
+            "frame count 11 beyond the file or the 9 converged steps",
+        );
+        // No contact state where the scenario has obstacles.
+        // (A file without contact, its header's bodies made 2.)
+        let mut none = sample(false).to_bytes();
+        none.truncate(none.len() - 8);
+        let bodies_at = 8 + 4 + 8 + 8 + (4 + 9 + 4 + 25 + 8) + 16;
+        none[bodies_at..bodies_at + 8].copy_from_slice(&2u64.to_le_bytes());
+        let e = Checkpoint::from_bytes(&seal(none, VERSION), 6, 2, 0xdead_beef).unwrap_err();
+        assert!(e.to_string().contains("contact flag 0"), "{e}");
         // A later version is refused by name.
         let mut later = sample(true).to_bytes();
         later.truncate(later.len() - 8);
-        let later = seal(later, 4);
+        let later = seal(later, 5);
         let e = Checkpoint::from_bytes(&later, 6, 2, 0xdead_beef).unwrap_err();
         assert!(
             e.to_string()
-                .contains("version 4, this drape reads versions 1 to 3"),
+                .contains("version 5, this drape reads versions 1 to 4"),
             "{e}"
         );
+    }
+
+    /// Counts and lengths read from the file are bounded before anything
+    /// is allocated, and a file cut short (but sealed) names the field it
+    /// ends in.
+    #[test]
+    fn refuses_absurd_counts_and_names_the_field_a_sealed_file_ends_in() {
+        let c = sample(true);
+        let bytes = c.to_bytes();
+        let body = |b: &[u8]| b[..b.len() - 8].to_vec();
+        let forge = |at: usize, value: &[u8]| {
+            let mut b = body(&bytes);
+            b[at..at + value.len()].copy_from_slice(value);
+            seal(b, VERSION)
+        };
+        let says = |b: &[u8], says: &str| {
+            let e = Checkpoint::from_bytes(b, 6, 2, 0xdead_beef).unwrap_err();
+            assert!(e.to_string().contains(says), "{says}: {e}");
+        };
+        // The input files' count, right after the scenario hash.
+        says(
+            &forge(20, &u64::MAX.to_le_bytes()),
+            "input files 18446744073709551615, more than the 3",
+        );
+        // The first key's length.
+        says(
+            &forge(28, &u32::MAX.to_le_bytes()),
+            "input files[0] key of 4294967295 bytes",
+        );
+        // The frame count, before the two frames and the checksum.
+        let frames = bytes.len() - 8 - 2 * 16 - 8;
+        says(
+            &forge(frames, &(u64::MAX / 2).to_le_bytes()),
+            "frame count 9223372036854775807 beyond the file",
+        );
+        // A sealed file cut in the positions.
+        let header = 8 + 4 + 8 + 8 + (4 + 9 + 4 + 25 + 8) + 24;
+        let counters = 8 * 12;
+        let cut = header + counters + 24 + 8 * 3;
+        says(
+            &seal(body(&bytes)[..cut].to_vec(), VERSION),
+            "truncated in positions",
+        );
+        // The contact flag.
+        let flag = header + counters + 24 + 8 * 6 * 4;
+        says(&forge(flag, &[7]), "contact flag 7 is neither 0 nor 1");
+    }
+
+    /// The recorded files against the scenario's: a changed one is named
+    /// with its path, a list of other keys is refused.
+    #[test]
+    fn compares_the_input_files_in_order() {
+        let file = |key: &str, path: &str, hash: u64| InputFile {
+            key: key.into(),
+            path: path.into(),
+            hash,
+        };
+        let recorded = [
+            file("mesh.path", "/a/m.msh", 1),
+            file("obstacle[1].path", "/a/o.stl", 2),
+        ];
+        assert!(Checkpoint::check_inputs(&recorded, &recorded).is_ok());
+        let changed = [
+            file("mesh.path", "/a/m.msh", 1),
+            file("obstacle[1].path", "/b/o.stl", 3),
+        ];
+        let e = Checkpoint::check_inputs(&recorded, &changed).unwrap_err();
+        let text = e.to_string();
+        assert!(
+            text.contains("the input file /b/o.stl (obstacle[1].path) has changed")
+                && text.contains("(the checkpoint recorded it as /a/o.stl)")
+                && text.contains("Restore the file as it was, or start a fresh run"),
+            "{text}"
+        );
+        let other = [file("mesh.path", "/a/m.msh", 1)];
+        let e = Checkpoint::check_inputs(&recorded, &other).unwrap_err();
+        assert!(e.to_string().contains("input files ["), "{e}");
     }
 }

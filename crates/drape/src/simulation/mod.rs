@@ -35,7 +35,7 @@ use crate::model::Model;
 use crate::output::atomic::write_atomic;
 use crate::output::history::HistoryWriter;
 use crate::output::pvd::{PvdWriter, frame_relative_path};
-use crate::scenario::{Analysis, Setup};
+use crate::scenario::{Analysis, InputFile, Setup};
 use crate::solver::NewtonError;
 pub use checkpoint::{Checkpoint, CheckpointError, Counters};
 use frames::Snapshot;
@@ -331,6 +331,43 @@ pub fn checkpoint_path(out: &Path) -> PathBuf {
     out.join("checkpoint.bin")
 }
 
+/// Before a resume is set up: each input file the checkpoint in `out`
+/// recorded (the mesh, the obstacles' meshes) must still hold the bytes it
+/// had, or the resume is refused naming the file — changed, missing or
+/// unreadable. A checkpoint that cannot be read, or one that recorded no
+/// files (version 3), passes: [`run_with`] reports the former, and checks
+/// the scenario's files again against the checkpoint when it resumes.
+///
+/// The check comes before the scenario is built, so that a changed file
+/// is reported as such rather than as an error of its contents (a mesh
+/// that no longer reads) or of the model's sizes.
+pub fn check_resume_inputs(out: &Path) -> Result<(), RunError> {
+    let path = checkpoint_path(out);
+    let Ok(bytes) = std::fs::read(&path) else {
+        return Ok(());
+    };
+    let Ok(Some(inputs)) = Checkpoint::recorded_inputs(&bytes) else {
+        return Ok(());
+    };
+    for input in inputs {
+        let error = match InputFile::hash_file(&input.path) {
+            Ok(hash) if hash == input.hash => continue,
+            Ok(_) => CheckpointError::InputChanged {
+                key: input.key,
+                recorded: input.path.clone(),
+                path: input.path,
+            },
+            Err(error) => CheckpointError::InputMissing {
+                key: input.key,
+                path: input.path,
+                error,
+            },
+        };
+        return Err(RunError::Resume(format!("{}: {error}", path.display())));
+    }
+    Ok(())
+}
+
 /// Runs a scenario into `out`, calling `observer` after each converged
 /// step. Writes `summary.json` in every case; returns it on success.
 pub fn run(
@@ -343,7 +380,9 @@ pub fn run(
 
 /// [`run`] with external control: interruption and resumption.
 ///
-/// A resumed run continues from `out/checkpoint.bin`: the history is cut
+/// A resumed run continues from `out/checkpoint.bin` ([`Checkpoint::read`]:
+/// the same scenario text and input files, every value sound and within
+/// the schedule; the frames it lists on disk): the history is cut
 /// back to the checkpoint's rows, the ParaView collection to its frames,
 /// and the run goes on exactly as the uninterrupted run would have — the
 /// same history and final state to the last bit (assembly and solvers are
@@ -374,15 +413,25 @@ pub fn run_with(
     // `written`: the frames handed to the writer thread, `(time, step)`;
     // a fresh run also has its initial frame to hand over.
     let (state, counters, controller, history, pvd, written, initial_frame) = if control.resume {
-        let bodies = model.contact.as_ref().map_or(0, |c| c.bodies.len());
         let path = checkpoint_path(out);
         let bytes = std::fs::read(&path)
             .map_err(|e| RunError::Resume(format!("{}: {e}", path.display())))?;
-        let ck = Checkpoint::from_bytes(&bytes, model.dofs(), bodies, setup.scenario_hash)
+        let ck = Checkpoint::read(&bytes, setup)
             .map_err(|e| RunError::Resume(format!("{}: {e}", path.display())))?;
         // Checked before the history and the collection are cut back.
         let controller = step_controller(setup, &ck.counters)
             .map_err(|e| RunError::Resume(format!("{}: {e}", path.display())))?;
+        if let Some((_, k)) = ck
+            .frames
+            .iter()
+            .find(|(_, k)| !out.join(frame_relative_path(*k as u64)).is_file())
+        {
+            return Err(RunError::Resume(format!(
+                "{}: the frame {} it lists is missing: the collection would name a file that is not there; restore the frames, or start a fresh run (without --resume)",
+                path.display(),
+                out.join(frame_relative_path(*k as u64)).display()
+            )));
+        }
         ws.f_ext.copy_from_slice(&ck.external_forces);
         let entries = ck
             .frames
@@ -394,7 +443,7 @@ pub fn run_with(
             writer: HistoryWriter::resume(
                 &history_path,
                 &history_columns(setup),
-                ck.counters.step + 1,
+                ck.counters.step.saturating_add(1),
             )
             .map_err(|e| RunError::Resume(format!("{}: {e}", history_path.display())))?,
             scratch: vec![0.0; model.dofs()],
@@ -747,6 +796,7 @@ impl Stepper<'_, '_> {
         self.output_seconds += output_start.elapsed().as_secs_f64();
         let ck = Checkpoint {
             scenario_hash: self.setup.scenario_hash,
+            inputs: Some(self.setup.inputs.clone()),
             counters: Counters {
                 wall_seconds: self.counters.wall_seconds + self.start.elapsed().as_secs_f64(),
                 ..self.counters

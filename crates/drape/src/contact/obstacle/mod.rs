@@ -111,7 +111,7 @@ pub use cylinder::CylinderObstacle;
 pub use plane::PlaneObstacle;
 pub use rounded::Rounded;
 pub use sphere::SphereObstacle;
-pub use trimesh::{TriMeshObstacle, read_mesh_obstacle};
+pub use trimesh::{TriMeshObstacle, read_mesh_obstacle, read_mesh_obstacle_with_bytes};
 
 use crate::mesh::gmsh::MeshReadError;
 use crate::vec3::{add, norm, scale};

@@ -666,21 +666,33 @@ impl Obstacle for TriMeshObstacle {
 /// naming the file and the line or byte), another extension, and every
 /// error of [`TriMeshObstacle::new`] (named after the file).
 pub fn read_mesh_obstacle(path: &Path) -> Result<TriMeshObstacle, ObstacleError> {
-    let file = path.display().to_string();
+    read_mesh_obstacle_with_bytes(path).map(|(obstacle, _)| obstacle)
+}
+
+/// [`read_mesh_obstacle`], with the file's bytes as read (a run records
+/// their hash, for a resume to tell a changed file).
+pub fn read_mesh_obstacle_with_bytes(
+    path: &Path,
+) -> Result<(TriMeshObstacle, Vec<u8>), ObstacleError> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let mesh = match extension.as_deref() {
-        Some("obj") => crate::mesh::obj::read_obj(path)?,
-        Some("stl") => super::stl::read_stl(path)?,
-        _ => return Err(ObstacleError::UnsupportedFormat { file }),
+    let parse = match extension.as_deref() {
+        Some("obj") => crate::mesh::obj::parse_obj,
+        Some("stl") => super::stl::parse_stl,
+        _ => {
+            let file = path.display().to_string();
+            return Err(ObstacleError::UnsupportedFormat { file });
+        }
     };
+    let (bytes, file) = crate::mesh::MeshReadError::read(path)?;
+    let mesh = parse(&bytes, &file)?;
     let triangles = mesh
         .elements()
         .filter_map(|e| <[usize; 3]>::try_from(e.get(..3)?).ok())
         .collect();
-    TriMeshObstacle::new(file, mesh.nodes, triangles)
+    Ok((TriMeshObstacle::new(file, mesh.nodes, triangles)?, bytes))
 }
 
 #[cfg(test)]
