@@ -119,6 +119,21 @@ fn second_derivative(patch: &Patch, x: &[[f64; 3]], j: usize) -> [f64; 3] {
     v
 }
 
+/// The moments `M = A D' (kappa - kappa_0)` of curvatures `kappa` and the
+/// energy `1/2 (kappa - kappa_0) . M`.
+#[inline]
+fn moments(patch: &Patch, kappa: [f64; 3]) -> ([f64; 3], f64) {
+    let e = [0, 1, 2].map(|j| kappa[j] - patch.rest[j]);
+    let ad = &patch.stiffness;
+    let m = [0, 1, 2].map(|i| ad[i][0] * e[0] + ad[i][1] * e[1] + ad[i][2] * e[2]);
+    (m, 0.5 * (e[0] * m[0] + e[1] * m[1] + e[2] * m[2]))
+}
+
+/// The bending energy of `patch` at `x` alone (J).
+pub fn energy(patch: &Patch, x: &[[f64; 3]]) -> f64 {
+    moments(patch, curvature(patch, x)).1
+}
+
 /// The bending energy of `patch` at `x`; with `hessian`, also its gradient
 /// and Hessian into `out` (the gradient always).
 pub fn evaluate(patch: &Patch, x: &[[f64; 3]], hessian: bool, out: &mut Local) -> f64 {
@@ -127,10 +142,8 @@ pub fn evaluate(patch: &Patch, x: &[[f64; 3]], hessian: bool, out: &mut Local) -
     let (n, r) = normal(x);
     let v = [0, 1, 2].map(|j| second_derivative(patch, x, j));
     let kappa = v.map(|vj| dot(n, vj));
-    let e = [0, 1, 2].map(|j| kappa[j] - patch.rest[j]);
+    let (m, energy) = moments(patch, kappa);
     let ad = &patch.stiffness;
-    let m = [0, 1, 2].map(|i| ad[i][0] * e[0] + ad[i][1] * e[1] + ad[i][2] * e[2]);
-    let energy = 0.5 * (e[0] * m[0] + e[1] * m[1] + e[2] * m[2]);
     out.energy = energy;
 
     let p = {

@@ -37,7 +37,7 @@
 pub mod kernel;
 pub mod patch;
 
-use crate::mesh::{ElementOrder, Mesh};
+use crate::mesh::Mesh;
 use crate::par::Shared;
 use crate::solver::SparsePattern;
 use patch::{Patch, PatchError};
@@ -398,28 +398,16 @@ impl Bending {
                 for (k, &a) in nodes.iter().enumerate() {
                     x[k] = [y[3 * a], y[3 * a + 1], y[3 * a + 2]];
                 }
-                let kappa = kernel::curvature(p, &x[..nodes.len()]);
-                let e = [0, 1, 2].map(|j| kappa[j] - p.rest[j]);
-                let s = &p.stiffness;
-                0.5 * (0..3)
-                    .map(|i| e[i] * (s[i][0] * e[0] + s[i][1] * e[1] + s[i][2] * e[2]))
-                    .sum::<f64>()
+                kernel::energy(p, &x[..nodes.len()])
             })
             .sum()
-    }
-
-    /// The order of mesh this was built for supports bending: all do.
-    pub fn supports(order: ElementOrder) -> bool {
-        matches!(
-            order,
-            ElementOrder::Linear | ElementOrder::Quadratic | ElementOrder::Cubic
-        )
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::ElementOrder;
     use crate::mesh::generate::{Pattern, rectangle};
 
     /// The parallel assembly (colours, chunks) adds the same gradient and

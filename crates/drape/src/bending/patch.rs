@@ -56,8 +56,8 @@ pub struct Patch {
     /// `C_jk`: Voigt component `j` of `(q_,11, q_,22, 2 q_,12)` per unit
     /// position of local node `k` (1/m^2).
     pub coefficients: [[f64; 6]; 3],
-    /// `A D'` (N m^3 ... J m^2 in Voigt curvature units): the reference
-    /// area times the condensed bending stiffness.
+    /// `A D'` (N m^3): the reference area times the condensed bending
+    /// stiffness (Voigt, for `kappa_11, kappa_22, 2 kappa_12`).
     pub stiffness: [[f64; 3]; 3],
     /// Curvature of the reference configuration, `kappa_0` (1/m).
     pub rest: [f64; 3],

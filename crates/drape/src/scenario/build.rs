@@ -304,28 +304,17 @@ fn build_material(
 fn build_bending(c: &Checker, m: &MaterialSpec) -> Result<Option<BendingRigidity>, ScenarioError> {
     let t = "material";
     let key = "bending_rigidity";
-    let rigidity = |v: &toml::Value, name: &str| -> Result<f64, ScenarioError> {
+    // A rigidity (N m): a finite number >= 0, or `None` (with what to say).
+    let number = |v: &toml::Value| -> Result<f64, String> {
         let b = match v {
             toml::Value::Float(f) => *f,
             toml::Value::Integer(i) => *i as f64,
-            other => {
-                return Err(c.invalid_in(
-                    t,
-                    key,
-                    name,
-                    format!("must be a number (N m), not {other}"),
-                ));
-            }
+            other => return Err(format!("must be a number (N m), not {other}")),
         };
         if b.is_finite() && b >= 0.0 {
             Ok(b)
         } else {
-            Err(c.invalid_in(
-                t,
-                key,
-                name,
-                format!("must be a finite number >= 0 (N m), not {b}"),
-            ))
+            Err(format!("must be a finite number >= 0 (N m), not {b}"))
         }
     };
     let direction = match m.warp_direction {
@@ -376,7 +365,7 @@ fn build_bending(c: &Checker, m: &MaterialSpec) -> Result<Option<BendingRigidity
                 ));
             }
             let get = |name: &str| match table.get(name) {
-                Some(v) => rigidity(v, name),
+                Some(v) => number(v).map_err(|why| c.invalid_in(t, key, name, why)),
                 None => Err(c.invalid_in(
                     t,
                     key,
@@ -392,8 +381,16 @@ fn build_bending(c: &Checker, m: &MaterialSpec) -> Result<Option<BendingRigidity
             })
         }
         Some(v) => {
-            let b = rigidity(v, "")
-                .map_err(|_| c.invalid(t, None, key, format!("must be a finite number >= 0 (N m), a table {{ warp, weft }} or \"plate\", not {v}")))?;
+            let b = number(v).map_err(|_| {
+                c.invalid(
+                    t,
+                    None,
+                    key,
+                    format!(
+                        "must be a finite number >= 0 (N m), a table {{ warp, weft }} or \"plate\", not {v}"
+                    ),
+                )
+            })?;
             (b > 0.0).then_some(BendingRigidity::Isotropic(b))
         }
     };

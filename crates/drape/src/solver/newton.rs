@@ -225,16 +225,17 @@ const FIRST_SHIFT: f64 = 0.03;
 /// Levenberg and Marquardt's scaling; Nocedal & Wright 2006,
 /// §3.4, "modified Newton"), until the direction descends; the Hessian is
 /// left shifted for the step's line search and chord steps. Returns the
-/// slope `G . dY` of the direction kept and the number of shifts.
+/// slope `G . dY` of the direction kept; `report` counts the shifts and
+/// records the last factorisation.
 fn descend(
     system: &impl NewtonSystem,
     ws: &mut NewtonWorkspace,
+    report: &mut NewtonReport,
     symmetric: bool,
     mut slope: f64,
-) -> Result<(f64, usize), NewtonError> {
-    let mut shifts = 0;
+) -> Result<f64, NewtonError> {
     if slope < 0.0 {
-        return Ok((slope, 0));
+        return Ok(slope);
     }
     if ws.diagonal.is_empty() {
         ws.diagonal = ws.linear.diagonal_positions();
@@ -243,7 +244,10 @@ fn descend(
     ws.unshifted
         .extend(ws.diagonal.iter().map(|p| p.map_or(0.0, |p| ws.h[p])));
     let mut tau = FIRST_SHIFT;
-    while slope >= 0.0 && shifts < MAX_SHIFTS {
+    for _ in 0..MAX_SHIFTS {
+        if slope < 0.0 {
+            break;
+        }
         for (p, d) in ws.diagonal.iter().zip(&ws.unshifted) {
             if let Some(p) = *p {
                 ws.h[p] = d + tau * d.abs();
@@ -252,13 +256,13 @@ fn descend(
         for (d, g) in ws.dy.iter_mut().zip(&ws.g) {
             *d = -g;
         }
-        ws.linear.solve(&ws.h, symmetric, &mut ws.dy)?;
+        report.factorization = Some(ws.linear.solve(&ws.h, symmetric, &mut ws.dy)?);
         system.transform_increment(&mut ws.dy);
         slope = dot(&ws.g, &ws.dy);
-        shifts += 1;
+        report.shifts += 1;
         tau *= 10.0;
     }
-    Ok((slope, shifts))
+    Ok(slope)
 }
 
 /// An increment `|dY| / L` at the round-off of the positions: Newton
@@ -364,9 +368,7 @@ pub fn solve(
         // that the residual of a non-convex potential is not).
         let energy0 = eval.energy;
         let slope = if energy0.is_some() {
-            let (slope, shifts) = descend(system, ws, eval.symmetric, dot(&ws.g, &ws.dy))?;
-            report.shifts += shifts;
-            slope
+            descend(system, ws, &mut report, eval.symmetric, dot(&ws.g, &ws.dy))?
         } else {
             0.0
         };
