@@ -1,0 +1,227 @@
+//! `drape.run` and `drape.check`: what `drape run` and `drape check` do,
+//! called from Python.
+//!
+//! The run holds the output directory as the command line does (its lock,
+//! a fresh run's clean slate, `scenario.toml` and `scenario.path` for
+//! `--resume` and for readers) and runs with the GIL released. Ctrl-C
+//! reaches a Rust loop only through Python: the interpreter's own handler
+//! records the signal, and the run's observer asks for it
+//! (`PyErr_CheckSignals`, every [`SIGNAL_INTERVAL`] at most, between
+//! steps); a pending `KeyboardInterrupt` sets the stop flag the command
+//! line's handler sets, so the run ends as it does there — the step
+//! finished, a checkpoint, the summary (`"interrupted"`) — and then the
+//! `KeyboardInterrupt` is raised.
+
+use crate::errors::{output_error, run_error, scenario_error};
+use crate::input::{Loaded, Source};
+use crate::result::{RunResult, json_to_py};
+use drape::output::{atomic::write_atomic, directory};
+use drape::simulation::{self, RunControl, RunError, StepInfo};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// How often a run asks Python whether a signal came: attaching to the
+/// interpreter costs about a microsecond when no other thread holds it,
+/// and at most a switch interval (5 ms) when one does.
+const SIGNAL_INTERVAL: Duration = Duration::from_millis(50);
+
+/// Runs a scenario and writes its outputs, as `drape run` does.
+///
+/// Args:
+///     scenario: the path of a scenario file (TOML), or a dict with the
+///         TOML's structure (its relative paths are taken from the working
+///         directory).
+///     out: the output directory; default ``out/<scenario stem>`` for a
+///         file (as the command line), required for a dict.
+///     resume: continue the interrupted run in ``out`` from its checkpoint
+///         (the same scenario and input files), as ``drape run --resume``.
+///
+/// Returns:
+///     RunResult: the summary, the history and the frames written in ``out``.
+///
+/// Raises:
+///     ScenarioError: the scenario is invalid (with its file, key and line).
+///     RunError: the run failed (``result`` holds what it wrote up to then).
+///     OutputError: ``out`` is in use by another run or holds other files.
+///     KeyboardInterrupt: Ctrl-C; the run finished its step and wrote a
+///         checkpoint and its summary (status ``"interrupted"``) first.
+#[pyfunction]
+#[pyo3(signature = (scenario, out = None, *, resume = false))]
+pub fn run(
+    py: Python<'_>,
+    scenario: &Bound<'_, PyAny>,
+    out: Option<PathBuf>,
+    resume: bool,
+) -> PyResult<RunResult> {
+    let source = Source::from_py(scenario)?;
+    let out = match (out, &source) {
+        (Some(out), _) => out,
+        (None, Source::File(path)) => default_out(path),
+        (None, Source::Dict(_)) => {
+            return Err(PyValueError::new_err(
+                "a scenario given as a dict needs out=: there is no file name to name the output directory after",
+            ));
+        }
+    };
+    if resume {
+        // A changed or missing input file is named as such, before the
+        // scenario reads it (as the command line does).
+        simulation::check_resume_inputs(&out).map_err(|e| run_error(py, e.to_string(), &out))?;
+    }
+    let loaded = py
+        .detach(|| source.load())
+        .map_err(|e| scenario_error(py, &e, matches!(source, Source::Dict(_))))?;
+    let lock = directory::lock(&out).map_err(|e| output_error(py, e.to_string(), &out))?;
+    if !resume {
+        let scenario_file = match &source {
+            Source::File(path) => Some(path.as_path()),
+            Source::Dict(_) => None,
+        };
+        directory::clear_previous_outputs(&lock, &out, scenario_file)
+            .map_err(|e| output_error(py, e.to_string(), &out))?;
+        keep_scenario(&source, &loaded, &out).map_err(|e| {
+            output_error(
+                py,
+                format!("cannot write into {}: {e}", out.display()),
+                &out,
+            )
+        })?;
+    }
+
+    let stop = AtomicBool::new(false);
+    let mut signal: Option<PyErr> = None;
+    let result = py.detach(|| {
+        let mut asked = Instant::now();
+        let mut observer = |_: &StepInfo| {
+            if asked.elapsed() < SIGNAL_INTERVAL || signal.is_some() {
+                return;
+            }
+            asked = Instant::now();
+            if let Err(e) = Python::attach(|py| py.check_signals()) {
+                signal = Some(e);
+                stop.store(true, Ordering::SeqCst);
+            }
+        };
+        let control = RunControl {
+            stop: Some(&stop),
+            resume,
+        };
+        simulation::run_with(&loaded.setup, &out, &mut observer, control)
+    });
+    drop(lock);
+    match result {
+        Ok(summary) => {
+            let value = serde_json::to_value(&summary)
+                .map_err(|e| PyValueError::new_err(format!("summary: {e}")))?;
+            let summary = json_to_py(py, &value)?.cast_into::<PyDict>()?;
+            Ok(RunResult::new(out, summary.unbind()))
+        }
+        Err(RunError::Interrupted { message }) => {
+            let hint = format!(
+                "{message}, or from Python with drape.run(scenario, out={:?}, resume=True)",
+                out.display().to_string()
+            );
+            match signal {
+                // A handler of the caller's own raised something else:
+                // that is what it wanted raised.
+                Some(e) if !e.is_instance_of::<PyKeyboardInterrupt>(py) => Err(e),
+                _ => Err(PyKeyboardInterrupt::new_err(hint)),
+            }
+        }
+        Err(e) => Err(run_error(py, e.to_string(), &out)),
+    }
+}
+
+/// Validates a scenario and builds its model without running it, as
+/// `drape check` does.
+///
+/// Args:
+///     scenario: the path of a scenario file (TOML), or a dict with the
+///         TOML's structure.
+///
+/// Returns:
+///     dict: ``title``, ``nodes``, ``elements``, ``order``, ``dofs``,
+///     ``fixed_dofs``, ``mass`` (kg) and ``monitors`` (name -> node index).
+///
+/// Raises:
+///     ScenarioError: with the file, the key and the line of what is wrong.
+#[pyfunction]
+pub fn check<'py>(py: Python<'py>, scenario: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyDict>> {
+    let source = Source::from_py(scenario)?;
+    let loaded = py
+        .detach(|| source.load())
+        .map_err(|e| scenario_error(py, &e, matches!(source, Source::Dict(_))))?;
+    let setup = &loaded.setup;
+    let m = &setup.model;
+    let info = PyDict::new(py);
+    info.set_item("title", &setup.title)?;
+    info.set_item("nodes", m.mesh.node_count())?;
+    info.set_item("elements", m.mesh.element_count())?;
+    info.set_item("order", m.mesh.order.degree())?;
+    info.set_item("dofs", m.dofs())?;
+    info.set_item("fixed_dofs", m.fixed_count())?;
+    info.set_item("mass", m.total_mass())?;
+    let monitors = PyDict::new(py);
+    for mon in &setup.monitors {
+        monitors.set_item(&mon.name, mon.node)?;
+    }
+    info.set_item("monitors", monitors)?;
+    Ok(info)
+}
+
+/// Checks a scenario dict's structure (keys, types, choices) without
+/// building it, and returns its TOML text, relative paths joined to
+/// `folder`: the sweeps' cases are made with it.
+///
+/// Raises ScenarioError (file `name`, no line) for what the parser refuses.
+#[pyfunction]
+#[pyo3(signature = (scenario, folder, name))]
+pub fn _scenario_text(
+    py: Python<'_>,
+    scenario: &Bound<'_, PyDict>,
+    folder: PathBuf,
+    name: &str,
+) -> PyResult<String> {
+    let text = crate::input::scenario_text(scenario, &folder)?;
+    drape::scenario::Scenario::parse(&text, Path::new(name))
+        .map_err(|e| scenario_error(py, &e, true))?;
+    Ok(text)
+}
+
+/// `out/<stem>`, as the command line.
+fn default_out(path: &Path) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "run".into());
+    PathBuf::from("out").join(stem)
+}
+
+/// `OUT/scenario.toml` (the file's copy, or a dict's text) and
+/// `OUT/scenario.path` (where it lies), for `--resume` and for readers of
+/// the outputs.
+fn keep_scenario(source: &Source, loaded: &Loaded, out: &Path) -> std::io::Result<()> {
+    let copy = out.join("scenario.toml");
+    let original = match source {
+        Source::File(path) => {
+            // Never write a file onto itself (a sweep's case runs its
+            // scenario where its outputs go).
+            if std::fs::canonicalize(path).ok() != std::fs::canonicalize(&copy).ok() {
+                write_atomic(&copy, loaded.text.as_bytes())?;
+            }
+            std::fs::canonicalize(path)?
+        }
+        Source::Dict(text) => {
+            write_atomic(&copy, text.as_bytes())?;
+            std::fs::canonicalize(&copy)?
+        }
+    };
+    write_atomic(
+        &out.join("scenario.path"),
+        original.to_string_lossy().as_bytes(),
+    )
+}

@@ -1,0 +1,252 @@
+"""drape.run, drape.check and RunResult against the command line."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import PEDESTAL, drape, pedestal, short_pedestal, write_scenario
+
+# The tolerance the issue asks for. Both paths call the same library on the
+# same text, so they agree to the last bit; 1e-9 m leaves room for nothing
+# but a different computation.
+TOLERANCE = 1e-9
+
+
+def cli_run(cli: Path, scenario: Path, out: Path) -> drape.RunResult:
+    subprocess.run([str(cli), "run", str(scenario), "--out", str(out), "--quiet"], check=True)
+    return drape.RunResult(out)
+
+
+def assert_same_run(python: drape.RunResult, command_line: drape.RunResult) -> None:
+    a, b = python.history, command_line.history
+    assert list(a) == list(b)
+    assert len(a["step"]) == len(b["step"]) == python.summary["steps"] + 1
+    np.testing.assert_array_equal(a["time"], b["time"])
+    monitors = [c for c in a if c.endswith(("_x", "_y", "_z")) and c[:-2] in python.summary["monitors"]]
+    assert len(monitors) == 3 * len(python.summary["monitors"]) > 0
+    for column in monitors:
+        assert np.max(np.abs(a[column] - b[column])) <= TOLERANCE, column
+    for name, p in python.summary["monitors"].items():
+        assert np.max(np.abs(np.subtract(p, command_line.summary["monitors"][name]))) <= TOLERANCE
+    assert python.frames == command_line.frames
+    assert np.max(np.abs(python.positions() - command_line.positions())) <= TOLERANCE
+    for key in ("status", "steps", "time", "newton_iterations", "first_contact_time", "nodes", "dofs"):
+        assert python.summary[key] == command_line.summary[key], key
+
+
+def test_the_pedestal_from_python_equals_the_command_line(cli, tmp_path):
+    command_line = cli_run(cli, PEDESTAL, tmp_path / "cli")
+    python = drape.run(PEDESTAL, out=tmp_path / "py")
+    assert python.summary["status"] == "completed"
+    assert python.summary["first_contact_time"] is not None
+    assert_same_run(python, command_line)
+    # The command line and Python keep the same scenario for --resume.
+    assert (tmp_path / "py" / "scenario.toml").read_text() == PEDESTAL.read_text()
+    assert (tmp_path / "py" / "scenario.path").read_text() == str(PEDESTAL.resolve())
+
+
+def test_a_dict_runs_as_its_file_does(cli, tmp_path):
+    doc = short_pedestal()
+    scenario = write_scenario(doc, tmp_path / "short.toml")
+    command_line = cli_run(cli, scenario, tmp_path / "cli")
+    python = drape.run(doc, out=tmp_path / "py")
+    assert_same_run(python, command_line)
+    # The dict's text is kept where --resume and the readers look for it.
+    kept = tmp_path / "py" / "scenario.toml"
+    assert (tmp_path / "py" / "scenario.path").read_text() == str(kept.resolve())
+    assert drape.check(kept)["nodes"] == 121
+
+
+def test_the_result_reads_the_outputs(tmp_path):
+    info = drape.check(short_pedestal())
+    res = drape.run(short_pedestal(), out=tmp_path / "run")
+    steps = res.summary["steps"]
+    assert steps == 40
+    history = res.history
+    assert history is res.history or history.keys() == res.history.keys()
+    for name, column in history.items():
+        assert isinstance(column, np.ndarray) and column.dtype == np.float64 and column.shape == (steps + 1,), name
+    np.testing.assert_array_equal(history["step"], np.arange(steps + 1))
+    # Frames every 10 steps and the last.
+    assert res.frames == [0, 10, 20, 30, 40]
+    last = res.positions()
+    assert last.shape == (info["nodes"], 3) and last.dtype == np.float64
+    np.testing.assert_array_equal(last, res.positions(40))
+    # A monitor's final position is its node's row in the last frame, and
+    # its history's last row.
+    for name, node in info["monitors"].items():
+        np.testing.assert_array_equal(last[node], res.summary["monitors"][name])
+        assert [history[f"{name}_{a}"][-1] for a in "xyz"] == res.summary["monitors"][name]
+    # The first frame is the flat initial mesh.
+    first = res.positions(0)
+    assert np.all(first[:, 2] == 0.0)
+    assert np.all(last[:, 2] < 0.0)
+    with pytest.raises(ValueError, match=r"0, 10, 20, 30, 40"):
+        res.positions(15)
+    with pytest.raises(ValueError, match="-1 for the last frame"):
+        res.positions(-2)
+    again = drape.RunResult(tmp_path / "run")
+    assert again.summary == res.summary and again.out == tmp_path / "run"
+    assert "status='completed'" in repr(res)
+
+
+def test_scenario_errors_carry_the_file_the_key_and_the_line(cli, tmp_path):
+    text = PEDESTAL.read_text().replace("poisson_ratio = 0.3", "poisson_ratio = 0.7")
+    scenario = tmp_path / "bad.toml"
+    scenario.write_text(text)
+    line = next(i for i, l in enumerate(text.splitlines(), 1) if l.startswith("poisson_ratio"))
+    with pytest.raises(drape.ScenarioError) as caught:
+        drape.check(scenario)
+    e = caught.value
+    assert (e.file, e.key, e.line) == (str(scenario), "material.poisson_ratio", line)
+    assert isinstance(e, ValueError) and isinstance(e, drape.DrapeError)
+    # The message is the command line's.
+    shown = subprocess.run([str(cli), "check", str(scenario)], capture_output=True, text=True)
+    assert shown.returncode == 2
+    assert shown.stderr.strip() == f"error: {e}"
+    # drape.run refuses it the same way, before the output directory exists.
+    with pytest.raises(drape.ScenarioError) as again:
+        drape.run(scenario, out=tmp_path / "out")
+    assert str(again.value) == str(e)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_parse_error_names_the_key_and_the_line(tmp_path):
+    scenario = tmp_path / "typo.toml"
+    scenario.write_text(PEDESTAL.read_text().replace("density = 320.0", 'density = "heavy"'))
+    with pytest.raises(drape.ScenarioError) as caught:
+        drape.check(scenario)
+    e = caught.value
+    assert e.key == "material.density" and e.line is not None and e.file == str(scenario)
+    assert f"{scenario}, line {e.line}: `material.density`" in str(e)
+
+
+def test_a_dict_error_has_its_key_and_no_line():
+    doc = pedestal(**{"load": [{"kind": "surface", "force": [0, 0, -1.8816], "ramp": -1.0}]})
+    with pytest.raises(drape.ScenarioError) as caught:
+        drape.check(doc)
+    e = caught.value
+    assert (e.file, e.key, e.line) == ("<dict>", "load[0].ramp", None)
+    assert str(e).startswith("<dict>: `load[0].ramp`")
+
+
+def test_what_is_not_a_scenario_is_refused(tmp_path):
+    with pytest.raises(TypeError, match="path of a TOML file"):
+        drape.check(42)
+    with pytest.raises(TypeError, match=r"scenario key `material.density`: a value of type object has no TOML value"):
+        drape.check(pedestal(**{"material.density": object()}))
+    with pytest.raises(ValueError, match="needs out="):
+        drape.run(short_pedestal())
+    with pytest.raises(drape.ScenarioError, match="cannot read"):
+        drape.check(tmp_path / "missing.toml")
+
+
+def test_a_failed_run_raises_run_error_with_what_it_wrote(tmp_path):
+    # One Newton iteration and no cut-back: the first contact step fails.
+    doc = short_pedestal()
+    doc["solver"] = {"max_iterations": 1, "max_cutbacks": 0}
+    with pytest.raises(drape.RunError) as caught:
+        drape.run(doc, out=tmp_path / "run")
+    e = caught.value
+    assert e.out == tmp_path / "run"
+    assert e.result is not None and e.result.summary["status"] == "failed"
+    assert e.result.summary["message"] in str(e)
+    assert len(e.result.history["step"]) == e.result.summary["steps"] + 1
+
+
+def test_an_output_directory_of_someone_else_is_refused(tmp_path):
+    out = tmp_path / "theirs"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+    with pytest.raises(drape.OutputError, match="notes.txt"):
+        drape.run(short_pedestal(), out=out)
+    assert (out / "notes.txt").read_text() == "mine"
+
+
+def test_the_gil_is_released_while_the_solver_runs(tmp_path):
+    # The pedestal at 20 x 20 takes about half a second. While it runs in a
+    # thread, this thread must keep running Python: with the GIL held, it
+    # would stall for the whole run.
+    done = threading.Event()
+    errors = []
+
+    def work():
+        try:
+            drape.run(PEDESTAL, out=tmp_path / "run")
+        except BaseException as e:  # reported below
+            errors.append(e)
+        finally:
+            done.set()
+
+    thread = threading.Thread(target=work)
+    start = time.perf_counter()
+    thread.start()
+    ticks, longest, last = 0, 0.0, time.perf_counter()
+    while not done.is_set():
+        now = time.perf_counter()
+        longest = max(longest, now - last)
+        last = now
+        ticks += 1
+        time.sleep(0.001)
+    thread.join()
+    elapsed = time.perf_counter() - start
+    assert not errors, errors
+    assert elapsed > 0.2
+    # The run re-enters Python for signals every 50 ms at most, for a few
+    # microseconds; a stall of half the run means the GIL was held.
+    assert longest < elapsed / 2, (longest, elapsed)
+    assert ticks > 50
+
+
+INTERRUPTED = """
+import sys, drape
+try:
+    drape.run(sys.argv[1], out=sys.argv[2])
+except KeyboardInterrupt as e:
+    print("KeyboardInterrupt:", e)
+    sys.exit(130)
+print("not interrupted")
+"""
+
+
+def test_ctrl_c_stops_the_run_as_the_command_line_does(tmp_path):
+    # A long pedestal (3,000 steps after the fall at 10 x 10: a second or two).
+    doc = short_pedestal()
+    doc["time"]["segments"] = [{"steps": 10, "dt": 0.01}, {"steps": 3000, "dt": 1.0e-4}]
+    scenario = write_scenario(doc, tmp_path / "long.toml")
+    out = tmp_path / "run"
+    child = subprocess.Popen(
+        [sys.executable, "-c", INTERRUPTED, str(scenario), str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    history = out / "history.csv"
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and (not history.is_file() or history.read_text().count("\n") < 30):
+        assert child.poll() is None, child.communicate()
+        time.sleep(0.02)
+    child.send_signal(2)  # SIGINT, as Ctrl-C in a terminal
+    stdout, stderr = child.communicate(timeout=60)
+    assert child.returncode == 130, (stdout, stderr)
+    assert "KeyboardInterrupt: interrupted after step" in stdout
+    assert "resume=True" in stdout
+    summary = drape.RunResult(out).summary
+    assert summary["status"] == "interrupted"
+    assert (out / "checkpoint.bin").is_file()
+    rows = history.read_text().count("\n") - 1
+    assert rows == summary["steps"] + 1 and summary["time"] < 0.39
+    # Resumed, it ends where an uninterrupted run ends, to the last bit.
+    resumed = drape.run(scenario, out=out, resume=True)
+    straight = drape.run(scenario, out=tmp_path / "straight")
+    assert resumed.summary["status"] == straight.summary["status"] == "completed"
+    assert resumed.summary["steps"] == straight.summary["steps"]
+    assert resumed.summary["monitors"] == straight.summary["monitors"]
+    np.testing.assert_array_equal(resumed.positions(), straight.positions())
