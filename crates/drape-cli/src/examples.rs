@@ -15,6 +15,14 @@ pub const ALL: &[(&str, &str)] = &[
         include_str!("../../../examples/drape-tester.toml"),
     ),
     (
+        "woven-drape-tester",
+        include_str!("../../../examples/woven-drape-tester.toml"),
+    ),
+    (
+        "bias-strip",
+        include_str!("../../../examples/bias-strip.toml"),
+    ),
+    (
         "pedestal-fine",
         include_str!("../../../examples/pedestal-fine.toml"),
     ),

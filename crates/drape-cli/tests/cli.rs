@@ -812,7 +812,10 @@ const BAD_INPUTS: &[BadInput] = &[
     },
     BadInput {
         file: "missing_required.toml",
-        fragments: &["missing field `youngs_modulus`"],
+        fragments: &[
+            "`material.youngs_modulus`",
+            "is required with model = \"saint-venant-kirchhoff\"",
+        ],
         line: Some(9),
     },
     BadInput {

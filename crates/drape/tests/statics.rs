@@ -3,14 +3,13 @@
 //! convergence.
 
 use drape::element::membrane::Section;
-use drape::integrator::newmark::DynamicWorkspace;
-use drape::integrator::{State, StaticStepper};
+
+mod common;
+use common::equilibrium_with;
 use drape::material::SaintVenantKirchhoff;
 use drape::mesh::generate::{Pattern, rectangle};
 use drape::mesh::{ElementOrder, Mesh};
 use drape::model::{MassKind, Model};
-use drape::simulation::reference_length;
-use drape::solver::NewtonSettings;
 
 const ORDERS: [ElementOrder; 3] = [
     ElementOrder::Linear,
@@ -43,31 +42,6 @@ fn model(mesh: Mesh, fixed: Vec<bool>) -> Model {
 fn equilibrium(model: &Model, y0: Vec<f64>) -> (Vec<f64>, Vec<f64>) {
     let (y, report, _) = equilibrium_with(model, y0, 0);
     (y, report.residuals)
-}
-
-/// [`equilibrium`] with up to `chord_steps` chord steps after each Newton
-/// step; also returns the report and the factorisations made.
-fn equilibrium_with(
-    model: &Model,
-    y0: Vec<f64>,
-    chord_steps: usize,
-) -> (Vec<f64>, drape::solver::NewtonReport, usize) {
-    let mut ws = DynamicWorkspace::new(model).unwrap();
-    let mut state = State::at_rest(model, y0);
-    let settings = NewtonSettings {
-        tolerance: 1e-12,
-        residual_tolerance: 1e-10,
-        max_iterations: 30,
-        chord_steps,
-    };
-    let length = reference_length(&model.initial_positions());
-    let report = StaticStepper
-        .step(model, &mut state, 1.0, &settings, length, &mut ws)
-        .unwrap();
-    let stats = ws.newton.linear.stats;
-    let factorisations =
-        stats.block_lu_factorizations + stats.cholesky_factorizations + stats.lu_factorizations;
-    (state.positions, report.newton, factorisations)
 }
 
 /// A distorted rectangle: interior nodes moved in-plane by up to 20 % of

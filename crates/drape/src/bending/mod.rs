@@ -37,6 +37,7 @@
 pub mod kernel;
 pub mod patch;
 
+use crate::element::geometry::AxisError;
 use crate::mesh::Mesh;
 use crate::par::Shared;
 use crate::solver::SparsePattern;
@@ -115,6 +116,9 @@ pub enum BendingError {
         /// The elements sharing it (0-based).
         elements: Vec<usize>,
     },
+    /// The warp of a woven rigidity is normal to an element.
+    #[error(transparent)]
+    Axis(#[from] crate::element::geometry::AxisError),
     /// A patch cannot be fitted.
     #[error("bending patch of element {element} (0-based, in the order read): {reason}")]
     Patch {
@@ -241,15 +245,19 @@ impl Bending {
                 continue; // a lone triangle cannot bend
             }
             let patch = Patch::fit(*tri, opposite[t], &mesh.nodes, &d, axis).map_err(|e| {
-                BendingError::Patch {
-                    element: owner[t],
-                    reason: match e {
-                        PatchError::Degenerate => "the triangle has no area".into(),
-                        PatchError::Frame => format!(
-                            "the warp direction {:?} is normal to the element, so it gives no axis in its plane",
-                            axis.unwrap_or_default()
-                        ),
-                        PatchError::Conic => "its six nodes lie on a conic, so no quadratic surface passes through them uniquely; remesh this region".into(),
+                let element = owner[t];
+                match e {
+                    PatchError::Frame => BendingError::Axis(AxisError {
+                        element,
+                        axis: axis.unwrap_or_default(),
+                    }),
+                    PatchError::Degenerate => BendingError::Patch {
+                        element,
+                        reason: "the triangle has no area".into(),
+                    },
+                    PatchError::Conic => BendingError::Patch {
+                        element,
+                        reason: "its six nodes lie on a conic, so no quadratic surface passes through them uniquely; remesh this region".into(),
                     },
                 }
             })?;

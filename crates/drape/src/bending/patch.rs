@@ -43,6 +43,7 @@
 //! approach", CMAME 194): curvatures constant on each triangle, the
 //! unknowns the nodal positions only.
 
+use crate::element::geometry::in_plane_axis;
 use crate::vec3::{cross, dot, norm, scale, sub};
 
 /// One triangle's bending patch: its nodes, its curvature coefficients,
@@ -113,14 +114,14 @@ impl Patch {
             return Err(PatchError::Degenerate);
         }
         let normal = scale(m, 1.0 / twice_area);
-        let e1 = {
-            let a = axis.unwrap_or_else(|| sub(x1, x0));
-            let t = sub(a, scale(normal, dot(a, normal)));
-            let len = norm(t);
-            if len < 1e-3 * norm(a) {
-                return Err(PatchError::Frame);
+        let e1 = match axis {
+            Some(a) => in_plane_axis(a, normal).ok_or(PatchError::Frame)?,
+            None => {
+                // An edge of the triangle: in its plane.
+                let a = sub(x1, x0);
+                let t = sub(a, scale(normal, dot(a, normal)));
+                scale(t, 1.0 / norm(t))
             }
-            scale(t, 1.0 / len)
         };
         let e2 = cross(normal, e1);
         let c = scale(crate::vec3::add(crate::vec3::add(x0, x1), x2), 1.0 / 3.0);

@@ -5,11 +5,31 @@
 //! local orthonormal frame is `e1 = G_1 / |G_1|`, `e3 = G_1 x G_2 / |G_1 x
 //! G_2|`, `e2 = e3 x e1`; `J0[b][k] = e_b . G_k`; `dA0 = det(J0) dxi =
 //! |G_1 x G_2| dxi`; `grad phi^a = J0^{-T} d phi^a / d xi` (docs/theory.md §1.2).
+//!
+//! A material with axes (an orthotropic fabric, [`crate::material::Material::axis`])
+//! takes instead `e1` along its axis `a` projected on the tangent plane,
+//! `e1 = (a - (a . e3) e3) / |...|`: the strains are then in the material's
+//! axes, whatever the node numbering. The projection must be at least
+//! [`AXIS_MIN_PROJECTION`] of `|a|` long.
 
 use super::lagrange::ShapeFunctions;
 use super::quadrature::QuadratureRule;
 use crate::mesh::Mesh;
-use crate::vec3::{cross, dot, norm, scale};
+use crate::vec3::{cross, dot, norm, scale, sub};
+
+/// The shortest projection of a material axis on an element's plane, as a
+/// fraction of the axis' length (the axis at most 89.4 degrees from the
+/// plane): below it the axis gives no reliable in-plane direction.
+pub const AXIS_MIN_PROJECTION: f64 = 1e-2;
+
+/// The unit projection of `axis` on the plane of unit normal `normal`, or
+/// `None` when it is shorter than [`AXIS_MIN_PROJECTION`] `|axis|` (or not
+/// finite).
+pub fn in_plane_axis(axis: [f64; 3], normal: [f64; 3]) -> Option<[f64; 3]> {
+    let t = sub(axis, scale(normal, dot(axis, normal)));
+    let len = norm(t);
+    (len >= AXIS_MIN_PROJECTION * norm(axis) && len > 0.0).then(|| scale(t, 1.0 / len))
+}
 
 /// The 2x2 initial mapping gradient `J0` and the reference area element
 /// `det J0` at one point with initial tangents `g1`, `g2`.
@@ -17,7 +37,18 @@ use crate::vec3::{cross, dot, norm, scale};
 pub fn initial_mapping(g1: [f64; 3], g2: [f64; 3]) -> ([[f64; 2]; 2], f64) {
     let n = cross(g1, g2);
     let e1 = scale(g1, 1.0 / norm(g1));
-    let e3 = scale(n, 1.0 / norm(n));
+    initial_mapping_in(g1, g2, e1, scale(n, 1.0 / norm(n)))
+}
+
+/// [`initial_mapping`] in the frame with first axis `e1` (a unit vector
+/// in the plane of unit normal `e3`).
+#[allow(non_snake_case)]
+fn initial_mapping_in(
+    g1: [f64; 3],
+    g2: [f64; 3],
+    e1: [f64; 3],
+    e3: [f64; 3],
+) -> ([[f64; 2]; 2], f64) {
     let e2 = cross(e3, e1);
     let J0 = [[dot(e1, g1), dot(e1, g2)], [dot(e2, g1), dot(e2, g2)]];
     let det = J0[0][0] * J0[1][1] - J0[0][1] * J0[1][0];
@@ -48,10 +79,38 @@ pub struct ElementGeometry {
     weight: Vec<f64>,
 }
 
+/// A material axis lies (nearly) along an element's normal
+/// ([`AXIS_MIN_PROJECTION`]).
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error(
+    "the material axis {axis:?} is normal to element {element} (its projection on the element's plane is shorter than {AXIS_MIN_PROJECTION} of its length), so it gives no direction in the element"
+)]
+pub struct AxisError {
+    /// The element.
+    pub element: usize,
+    /// The axis.
+    pub axis: [f64; 3],
+}
+
 impl ElementGeometry {
-    /// Computes the geometry of every element of a validated mesh.
-    #[allow(non_snake_case)]
+    /// Computes the geometry of every element of a validated mesh, in the
+    /// frames `e1 = G_1 / |G_1|`.
     pub fn new(mesh: &Mesh, rule: &QuadratureRule) -> Self {
+        match Self::with_axis(mesh, rule, None) {
+            Ok(g) => g,
+            Err(_) => unreachable!("no axis, no axis error"),
+        }
+    }
+
+    /// As [`Self::new`], with the local frames along the material axis
+    /// `axis` (projected on each quadrature point's tangent plane) when
+    /// there is one; an axis normal to an element is an error naming it.
+    #[allow(non_snake_case)]
+    pub fn with_axis(
+        mesh: &Mesh,
+        rule: &QuadratureRule,
+        axis: Option<[f64; 3]>,
+    ) -> Result<Self, AxisError> {
         let shape = ShapeFunctions::new(mesh.order);
         let n = shape.len();
         let nq = rule.len();
@@ -60,13 +119,21 @@ impl ElementGeometry {
         let mut grad = Vec::with_capacity(ne * nq * n);
         let mut weight = Vec::with_capacity(ne * nq);
         let mut x = [[0.0; 3]; super::lagrange::MAX_NODES];
-        for el in mesh.elements() {
+        for (element, el) in mesh.elements().enumerate() {
             for (a, &node) in el.iter().enumerate() {
                 x[a] = mesh.nodes[node];
             }
             for (q, (_, dphi)) in reference.iter().enumerate() {
                 let [g1, g2] = tangents(&x[..n], &dphi[..n]);
-                let (J0, det) = initial_mapping(g1, g2);
+                let (J0, det) = match axis {
+                    None => initial_mapping(g1, g2),
+                    Some(axis) => {
+                        let n = cross(g1, g2);
+                        let e3 = scale(n, 1.0 / norm(n));
+                        let e1 = in_plane_axis(axis, e3).ok_or(AxisError { element, axis })?;
+                        initial_mapping_in(g1, g2, e1, e3)
+                    }
+                };
                 // J0^{-T} applied to the reference derivative.
                 let inv = [
                     [J0[1][1] / det, -J0[0][1] / det],
@@ -81,12 +148,12 @@ impl ElementGeometry {
                 weight.push(rule.weights[q] * det);
             }
         }
-        Self {
+        Ok(Self {
             nodes_per_element: n,
             points_per_element: nq,
             grad,
             weight,
-        }
+        })
     }
 
     /// Quadrature points per element.

@@ -7,9 +7,11 @@
 //! energy per unit initial volume `W(e)` (J/m^3), the stress `s = dW/de`
 //! and the tangent `D = ds/de` (3x3, Pa).
 
+mod orthotropic;
 mod svk;
 pub mod wrinkling;
 
+pub use orthotropic::{Orthotropic, OrthotropicError};
 pub use svk::SaintVenantKirchhoff;
 pub use wrinkling::{WrinkleState, Wrinkling, WrinklingModel};
 
@@ -70,5 +72,13 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     /// state by the decomposition that gives the stress).
     fn stress_state(&self, strain: [f64; 3]) -> ([f64; 3], Option<WrinkleState>) {
         (self.stress(strain), self.wrinkle_state(strain))
+    }
+    /// The material's first axis in the initial configuration (the warp
+    /// of a woven fabric): each element's local frame then has `e1` along
+    /// its projection on the element's plane, and the strain handed to the
+    /// material is in those axes. `None` (the default) for an isotropic
+    /// material, whose elements keep `e1 = G_1 / |G_1|`.
+    fn axis(&self) -> Option<[f64; 3]> {
+        None
     }
 }

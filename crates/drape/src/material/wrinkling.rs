@@ -88,7 +88,7 @@ pub struct Wrinkling {
 
 /// Principal values `(l1, l2)`, `l1 >= l2`, and the unit direction `n1` of
 /// the symmetric tensor `[[a, c], [c, b]]`.
-fn eigen(a: f64, b: f64, c: f64) -> (f64, f64, [f64; 2]) {
+pub(super) fn eigen(a: f64, b: f64, c: f64) -> (f64, f64, [f64; 2]) {
     let m = 0.5 * (a + b);
     let h = 0.5 * (a - b);
     let r = (h * h + c * c).sqrt();

@@ -152,6 +152,9 @@ pub enum ModelError {
     /// Bending cannot be set up on the mesh.
     #[error(transparent)]
     Bending(#[from] crate::bending::BendingError),
+    /// The material's axis (the warp) is normal to an element.
+    #[error(transparent)]
+    Axis(#[from] crate::element::geometry::AxisError),
     /// A lumped mass came out non-positive at a node.
     #[error("the lumped mass of node {node} is {mass:e} kg (not positive)")]
     NonPositiveMass {
@@ -271,7 +274,11 @@ impl Model {
     ) -> Result<Self, ModelError> {
         mesh.validate()?;
         let p = mesh.order.degree();
-        let geometry = ElementGeometry::new(&mesh, &QuadratureRule::of_degree(4 * (p - 1)));
+        let geometry = ElementGeometry::with_axis(
+            &mesh,
+            &QuadratureRule::of_degree(4 * (p - 1)),
+            material.axis(),
+        )?;
         let colours = colour_elements(mesh.node_count(), mesh.elements());
         let halves = (mesh.element_count() < PARALLEL_ABOVE).then(|| Halves::new(&mesh, &colours));
         let layout = Layout::new(&mesh, &colours, halves.as_ref(), None);

@@ -7,13 +7,13 @@ use super::{
     MeshSpec, MonitorSpec, Scenario, ScenarioError, SegmentSpec, SolverSpec, TimeSpec,
     WrinklingSpec,
 };
-use crate::bending::BendingRigidity;
+use crate::bending::{BendingError, BendingRigidity};
 use crate::element::membrane::Section;
 use crate::integrator::Newmark;
 use crate::load::{Load, LoadKind};
-use crate::material::{Material, SaintVenantKirchhoff, Wrinkling};
+use crate::material::{Material, Orthotropic, SaintVenantKirchhoff, Wrinkling};
 use crate::mesh::{ElementOrder, Mesh, generate};
-use crate::model::Model;
+use crate::model::{Model, ModelError};
 use crate::simulation::schedule::{AdaptiveSteps, RestCriterion};
 use crate::solver::NewtonSettings;
 use std::path::{Path, PathBuf};
@@ -189,18 +189,24 @@ impl Scenario {
             fixed,
             self.analysis.mass,
         )
-        .map_err(|e| ScenarioError::Mesh {
-            file: file.to_path_buf(),
-            message: e.to_string(),
+        .map_err(|e| match e {
+            ModelError::Axis(e) => c.invalid("material", None, "warp_direction", e.to_string()),
+            e => ScenarioError::Mesh {
+                file: file.to_path_buf(),
+                message: e.to_string(),
+            },
         })?;
         if let Some(rigidity) = bending {
-            model = model.with_bending(rigidity).map_err(|e| {
-                c.invalid(
+            model = model.with_bending(rigidity).map_err(|e| match e {
+                ModelError::Bending(BendingError::Axis(e)) => {
+                    c.invalid("material", None, "warp_direction", e.to_string())
+                }
+                e => c.invalid(
                     "material",
                     None,
                     "bending_rigidity",
                     format!("cannot be set up on this mesh: {e}"),
-                )
+                ),
             })?;
         }
         if let Some(contact) = &contact {
@@ -248,17 +254,63 @@ fn build_material(
     is_static: bool,
 ) -> Result<(Box<dyn Material>, Section, f64), ScenarioError> {
     let t = "material";
-    // The only model so far: a new one is matched here.
-    let MaterialModel::SaintVenantKirchhoff = m.model;
-    let young = c.positive(t, None, "youngs_modulus", m.youngs_modulus)?;
-    if !(m.poisson_ratio.is_finite() && m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5) {
-        return Err(c.invalid(
-            t,
-            None,
-            "poisson_ratio",
-            format!("must lie in (-1, 0.5), not {}", m.poisson_ratio),
-        ));
-    }
+    let elastic: Elastic = match m.model {
+        MaterialModel::SaintVenantKirchhoff => {
+            c.none_of(
+                t,
+                None,
+                &[
+                    ("warp_modulus", m.warp_modulus.is_some()),
+                    ("weft_modulus", m.weft_modulus.is_some()),
+                    ("shear_modulus", m.shear_modulus.is_some()),
+                ],
+                "to model = \"saint-venant-kirchhoff\" (an isotropic material has youngs_modulus; set model = \"orthotropic\" for a woven fabric)",
+            )?;
+            let why = "with model = \"saint-venant-kirchhoff\" (Pa)";
+            let young = c.required(t, None, "youngs_modulus", &m.youngs_modulus, why)?;
+            let young = c.positive(t, None, "youngs_modulus", young)?;
+            if !(m.poisson_ratio.is_finite() && m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5) {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    "poisson_ratio",
+                    format!("must lie in (-1, 0.5), not {}", m.poisson_ratio),
+                ));
+            }
+            Elastic::Isotropic(young)
+        }
+        MaterialModel::Orthotropic => {
+            c.absent(
+                t,
+                None,
+                "youngs_modulus",
+                &m.youngs_modulus,
+                "to model = \"orthotropic\" (give warp_modulus, weft_modulus and shear_modulus)",
+            )?;
+            let modulus = |key: &str, v: &Option<f64>| {
+                let v = c.required(t, None, key, v, "with model = \"orthotropic\" (Pa)")?;
+                c.positive(t, None, key, v)
+            };
+            let e1 = modulus("warp_modulus", &m.warp_modulus)?;
+            let e2 = modulus("weft_modulus", &m.weft_modulus)?;
+            let g12 = modulus("shear_modulus", &m.shear_modulus)?;
+            let nu = m.poisson_ratio;
+            if !(nu.is_finite() && nu * nu < e1 / e2) {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    "poisson_ratio",
+                    format!(
+                        "must satisfy nu12^2 < warp_modulus / weft_modulus = {} (nu12 nu21 < 1, a positive definite material), not {nu}",
+                        e1 / e2
+                    ),
+                ));
+            }
+            let material = Orthotropic::new(e1, e2, g12, nu, warp_direction(c, m)?)
+                .map_err(|e| c.invalid(t, None, "model", e.to_string()))?;
+            Elastic::Orthotropic(Box::new(material))
+        }
+    };
     let thickness = c.positive(t, None, "thickness", m.thickness)?;
     let density = if is_static && m.density == 0.0 {
         0.0
@@ -277,26 +329,63 @@ fn build_material(
             ),
         ));
     }
-    let (material, prestress): (Box<dyn Material>, f64) = match m.wrinkling.model() {
-        None => (
+    let slack = if is_static { 1e-6 } else { 0.0 };
+    let (material, prestress): (Box<dyn Material>, f64) = match (elastic, m.wrinkling.model()) {
+        (Elastic::Isotropic(young), None) => (
             Box::new(SaintVenantKirchhoff::new(young, m.poisson_ratio)),
             m.prestress,
         ),
-        Some(model) => {
+        (Elastic::Isotropic(young), Some(model)) => {
             let w = Wrinkling::new(young, m.poisson_ratio, m.prestress, model);
             let w = if is_static {
-                w.with_slack_tangent(1e-6)
+                w.with_slack_tangent(slack)
             } else {
                 w
             };
             (Box::new(w), 0.0)
         }
+        (Elastic::Orthotropic(o), None) => (o, m.prestress),
+        (Elastic::Orthotropic(o), Some(model)) => (
+            Box::new(
+                o.with_wrinkling(model, m.prestress)
+                    .with_slack_tangent(slack),
+            ),
+            0.0,
+        ),
     };
     let section = Section {
         thickness,
         prestress,
     };
     Ok((material, section, density))
+}
+
+/// The elastic law of `[material] model`, before wrinkling.
+enum Elastic {
+    /// Saint-Venant–Kirchhoff with this Young's modulus (Pa).
+    Isotropic(f64),
+    /// The orthotropic material.
+    Orthotropic(Box<Orthotropic>),
+}
+
+/// `[material] warp_direction`, default `[1, 0, 0]`: finite and not zero.
+fn warp_direction(c: &Checker, m: &MaterialSpec) -> Result<[f64; 3], ScenarioError> {
+    let t = "material";
+    match m.warp_direction {
+        None => Ok([1.0, 0.0, 0.0]),
+        Some(d) => {
+            c.finite(t, None, "warp_direction", &d)?;
+            if d == [0.0; 3] {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    "warp_direction",
+                    "must not be the zero vector".into(),
+                ));
+            }
+            Ok(d)
+        }
+    }
 }
 
 /// `[material] bending_rigidity` and `warp_direction` (SPEC §6.2): `None`
@@ -317,26 +406,22 @@ fn build_bending(c: &Checker, m: &MaterialSpec) -> Result<Option<BendingRigidity
             Err(format!("must be a finite number >= 0 (N m), not {b}"))
         }
     };
-    let direction = match m.warp_direction {
-        None => [1.0, 0.0, 0.0],
-        Some(d) => {
-            c.finite(t, None, "warp_direction", &d)?;
-            if d == [0.0; 3] {
-                return Err(c.invalid(
-                    t,
-                    None,
-                    "warp_direction",
-                    "must not be the zero vector".into(),
-                ));
-            }
-            d
-        }
-    };
+    let direction = warp_direction(c, m)?;
     let value = match &m.bending_rigidity {
         None => None,
         Some(toml::Value::String(s)) if s == "plate" => {
-            let d =
-                m.youngs_modulus * m.thickness.powi(3) / (12.0 * (1.0 - m.poisson_ratio.powi(2)));
+            let Some(young) = m
+                .youngs_modulus
+                .filter(|_| m.model == MaterialModel::SaintVenantKirchhoff)
+            else {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    key,
+                    "= \"plate\" is E t^3 / (12 (1 - nu^2)) of an isotropic material; with model = \"orthotropic\" give { warp, weft } (N m)".into(),
+                ));
+            };
+            let d = young * m.thickness.powi(3) / (12.0 * (1.0 - m.poisson_ratio.powi(2)));
             Some(BendingRigidity::Plate {
                 rigidity: d,
                 poisson_ratio: m.poisson_ratio,
@@ -396,12 +481,15 @@ fn build_bending(c: &Checker, m: &MaterialSpec) -> Result<Option<BendingRigidity
     };
     // Judged on what was written: a woven `{ warp = 0, weft = 0 }` is no
     // bending, but its warp direction is still in place.
-    if m.warp_direction.is_some() && !matches!(m.bending_rigidity, Some(toml::Value::Table(_))) {
+    if m.warp_direction.is_some()
+        && m.model != MaterialModel::Orthotropic
+        && !matches!(m.bending_rigidity, Some(toml::Value::Table(_)))
+    {
         return Err(c.invalid(
             t,
             None,
             "warp_direction",
-            "applies only to a woven fabric's bending_rigidity = { warp, weft }".into(),
+            "applies only to model = \"orthotropic\" and to a woven fabric's bending_rigidity = { warp, weft }".into(),
         ));
     }
     Ok(value)

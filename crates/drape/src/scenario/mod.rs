@@ -161,12 +161,27 @@ pub enum MeshShape {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
-    /// `"saint-venant-kirchhoff"` (the default and, for now, the only model).
+    /// `"saint-venant-kirchhoff"` (isotropic, the default) or
+    /// `"orthotropic"` (a woven fabric, SPEC §6.2).
     #[serde(default)]
     pub model: MaterialModel,
-    /// Young's modulus `E` (Pa), > 0. Required.
-    pub youngs_modulus: f64,
-    /// Poisson's ratio `nu`, in (-1, 0.5). Required.
+    /// Young's modulus `E` (Pa), > 0. Required by the isotropic model, not
+    /// allowed with the orthotropic one.
+    #[serde(default)]
+    pub youngs_modulus: Option<f64>,
+    /// Orthotropic: the warp modulus `E1` (Pa, along the warp), > 0.
+    #[serde(default)]
+    pub warp_modulus: Option<f64>,
+    /// Orthotropic: the weft modulus `E2` (Pa, in-plane normal to the
+    /// warp), > 0.
+    #[serde(default)]
+    pub weft_modulus: Option<f64>,
+    /// Orthotropic: the in-plane shear modulus `G12` (Pa), > 0.
+    #[serde(default)]
+    pub shear_modulus: Option<f64>,
+    /// Poisson's ratio: isotropic `nu` in (-1, 0.5); orthotropic `nu12`
+    /// (weft contraction per unit warp stretch, `nu21 = nu12 E2 / E1`)
+    /// with `nu12^2 < E1 / E2`. Required.
     pub poisson_ratio: f64,
     /// Density `rho` (kg/m^3), > 0 (>= 0 in static analysis). Required.
     pub density: f64,
@@ -187,8 +202,8 @@ pub struct MaterialSpec {
     #[serde(default)]
     pub bending_rigidity: Option<toml::Value>,
     /// The warp direction in the initial configuration (projected on each
-    /// element's plane), default `[1, 0, 0]`: the axes of a woven
-    /// `bending_rigidity`.
+    /// element's plane), default `[1, 0, 0]`: the axes of the orthotropic
+    /// model and of a woven `bending_rigidity`.
     #[serde(default)]
     pub warp_direction: Option<[f64; 3]>,
 }
@@ -200,6 +215,8 @@ pub enum MaterialModel {
     /// Saint Venant–Kirchhoff: `S = lambda tr(E) I + 2 mu E`.
     #[default]
     SaintVenantKirchhoff,
+    /// Orthotropic Saint Venant–Kirchhoff in the warp/weft axes.
+    Orthotropic,
 }
 
 /// The values of `[material] wrinkling`.

@@ -91,3 +91,57 @@ thickness = 0.6e-3
 "#
     )
 }
+
+/// Solves `F_int(Y) = 0` from `y0` with the fixed components held where
+/// `y0` puts them (a static step to tolerance 1e-12), with up to
+/// `chord_steps` chord steps after each Newton step; returns the
+/// positions, Newton's report and the factorisations made.
+pub fn equilibrium_with(
+    model: &drape::model::Model,
+    y0: Vec<f64>,
+    chord_steps: usize,
+) -> (Vec<f64>, drape::solver::NewtonReport, usize) {
+    let mut ws = drape::integrator::newmark::DynamicWorkspace::new(model).unwrap();
+    let mut state = drape::integrator::State::at_rest(model, y0);
+    let settings = drape::solver::NewtonSettings {
+        tolerance: 1e-12,
+        residual_tolerance: 1e-10,
+        max_iterations: 30,
+        chord_steps,
+    };
+    let length = drape::simulation::reference_length(&model.initial_positions());
+    let report = drape::integrator::StaticStepper
+        .step(model, &mut state, 1.0, &settings, length, &mut ws)
+        .unwrap();
+    let stats = ws.newton.linear.stats;
+    let factorisations =
+        stats.block_lu_factorizations + stats.cholesky_factorizations + stats.lu_factorizations;
+    (state.positions, report.newton, factorisations)
+}
+
+/// Parses and builds scenario `text` read from `path`; the error as text.
+pub fn build(text: &str, path: &Path) -> Result<Setup, String> {
+    Scenario::parse(text, path)
+        .and_then(|s| s.build(path, text))
+        .map_err(|e| e.to_string())
+}
+
+/// The error of `text`, which must contain `test.toml, line {line}:
+/// `{key}`` and each of `fragments`.
+pub fn assert_error(text: &str, line: usize, key: &str, fragments: &[&str]) {
+    let message = match build(text, Path::new("test.toml")) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e,
+    };
+    let located = format!("test.toml, line {line}: `{key}`");
+    assert!(
+        message.contains(&located),
+        "expected {located:?} in\n{message}\nfor\n{text}"
+    );
+    for f in fragments {
+        assert!(
+            message.contains(f),
+            "expected {f:?} in\n{message}\nfor\n{text}"
+        );
+    }
+}
