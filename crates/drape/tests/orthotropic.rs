@@ -118,6 +118,11 @@ fn uniaxial_tension_gives_the_moduli_and_poisson_ratios() {
             (-PI / 3.0, modulus_at(PI / 3.0), None),
         ] {
             let (modulus, nu) = uniaxial(phi, order);
+            eprintln!(
+                "{order:?} phi = {:.0} deg: modulus {modulus:.6e} Pa vs {expected:.6e} ({:+.2e}), contraction {nu:.6}",
+                phi.to_degrees(),
+                modulus / expected - 1.0
+            );
             assert!(
                 (modulus / expected - 1.0).abs() < 1e-4,
                 "{order:?} phi {phi}: modulus {modulus} vs {expected}"
@@ -162,6 +167,13 @@ fn picture_frame_shear_gives_the_shear_modulus() {
         }
         let m = model(mesh, Box::new(fabric(warp)), fixed);
         let (y, _, _) = equilibrium_with(&m, y0, 0);
+        let worst = m
+            .element_results(&y)
+            .stress
+            .iter()
+            .map(|s| (s[2].abs() / (G12 * gamma) - 1.0).abs())
+            .fold(0.0, f64::max);
+        eprintln!("warp {warp:?}: |S12 / (G12 gamma) - 1| <= {worst:.1e} over the elements");
         for s in m.element_results(&y).stress {
             // The frame's second axis is the warp turned by +90 degrees
             // about the normal, so the shear stress has the same sign in
@@ -184,6 +196,10 @@ fn picture_frame_shear_gives_the_shear_modulus() {
         // nodes, corners included, carry the shear flow along the edge
         // plus half the side edges' share at the corners, which cancels
         // in the sum over the top.
+        eprintln!(
+            "warp {warp:?}: top edge force / (G12 gamma t L) = {:.6}",
+            top / (G12 * gamma * T * size)
+        );
         assert!(
             (top / (G12 * gamma * T * size) - 1.0).abs() < 1e-3,
             "warp {warp:?}: top force {top} vs {}",
