@@ -22,6 +22,7 @@ pub mod fd;
 pub mod integrator;
 pub mod load;
 pub mod material;
+pub mod measure;
 pub mod mesh;
 pub mod model;
 pub mod output;

@@ -1,0 +1,308 @@
+//! The drape tester of a measurement: which way is up, where the pedestal
+//! stands and how large it and the specimen are — found from the
+//! scenario, or given.
+//!
+//! - **Vertical**: opposite the scenario's weight, `k = −Σ f_i / |f_i|`
+//!   over its `surface` and `gravity` loads; `+z` without them (or without
+//!   a scenario).
+//! - **Pedestal**: an `[[obstacle]]` of shape `cylinder` whose axis is
+//!   vertical (within [`VERTICAL_TOLERANCE_DEGREES`]) and passes under the
+//!   specimen (within the initial rim's reach of its centre; the nearest
+//!   if several do), moved by its velocity to the frame's time. Its
+//!   radius is `r_p`, its axis the centre of the measurement.
+//! - **Specimen**: the `radius` of a `[mesh] shape = "disc"` (which must
+//!   then lie in a horizontal plane); for `shape = "file"` the initial
+//!   mesh's rim, whose nodes must all lie within [`RIM_TOLERANCE`] of one
+//!   radius `R` about their centroid; `R` is the largest.
+//!
+//! Either radius can be given instead ([`Given`]); what cannot be found
+//! nor was given is an error that says why.
+
+use super::{Horizontal, MeasureError};
+use crate::mesh::Mesh;
+use crate::scenario::{LoadKindSpec, MeshShape, ObstacleSpec, Scenario};
+use crate::vec3;
+
+/// Largest angle (degrees) between a cylinder's axis and the vertical for
+/// it to stand as a pedestal.
+pub const VERTICAL_TOLERANCE_DEGREES: f64 = 1.0;
+
+/// Largest spread of the initial rim's radii, as a fraction of the
+/// largest, for a file mesh to be a disc: 2 % (the mid-edge nodes of a T6
+/// on the chords of a 60-gon lie 0.14 % inside the circle).
+pub const RIM_TOLERANCE: f64 = 0.02;
+
+/// Radii given instead of found (m).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Given {
+    /// The pedestal's radius `r_p`.
+    pub pedestal_radius: Option<f64>,
+    /// The specimen's radius `R`.
+    pub specimen_radius: Option<f64>,
+}
+
+/// The geometry of a drape tester.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DrapeTester {
+    /// The horizontal plane, about a point on the pedestal's axis.
+    pub plane: Horizontal,
+    /// Pedestal radius `r_p` (m).
+    pub pedestal_radius: f64,
+    /// Specimen radius `R` (m).
+    pub specimen_radius: f64,
+    /// Where `r_p` came from: `"given"` or the obstacle, e.g. `"obstacle[1]"`.
+    pub pedestal_source: String,
+    /// Where `R` came from: `"given"`, `"mesh.radius"` or `"initial rim"`.
+    pub specimen_source: String,
+}
+
+impl DrapeTester {
+    /// A tester about `center` with the vertical `vertical` (any length)
+    /// and the radii `r_p < R`, given.
+    ///
+    /// # Errors
+    /// [`MeasureError::Vertical`] for a zero or non-finite vertical (or a
+    /// non-finite centre), [`MeasureError::Radius`] for a radius that is
+    /// not positive and finite, [`MeasureError::PedestalNotSmaller`].
+    pub fn new(
+        center: [f64; 3],
+        vertical: [f64; 3],
+        pedestal_radius: f64,
+        specimen_radius: f64,
+    ) -> Result<Self, MeasureError> {
+        let plane = Horizontal::new(center, vertical).ok_or(MeasureError::Vertical { vertical })?;
+        for (which, value) in [
+            ("pedestal radius", pedestal_radius),
+            ("specimen radius", specimen_radius),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(MeasureError::Radius { which, value });
+            }
+        }
+        if pedestal_radius >= specimen_radius {
+            return Err(MeasureError::PedestalNotSmaller {
+                pedestal: pedestal_radius,
+                specimen: specimen_radius,
+            });
+        }
+        Ok(Self {
+            plane,
+            pedestal_radius,
+            specimen_radius,
+            pedestal_source: "given".into(),
+            specimen_source: "given".into(),
+        })
+    }
+
+    /// The tester of a run of `scenario` (if there is one) whose initial
+    /// mesh is `initial`, at time `time` (s, for a moving pedestal), with
+    /// the radii of `given` taking the place of those found (module
+    /// documentation).
+    ///
+    /// # Errors
+    /// [`MeasureError::NoPedestal`] and [`MeasureError::NotADisc`] saying
+    /// why a radius that was not given cannot be found; those of
+    /// [`DrapeTester::new`].
+    pub fn find(
+        scenario: Option<&Scenario>,
+        initial: &Mesh,
+        time: f64,
+        given: Given,
+    ) -> Result<Self, MeasureError> {
+        let vertical = scenario.map_or([0.0, 0.0, 1.0], vertical_of);
+        let up = Horizontal::new([0.0; 3], vertical).ok_or(MeasureError::Vertical { vertical })?;
+        let rim: Vec<[f64; 3]> = initial
+            .boundary_nodes()
+            .into_iter()
+            .map(|a| initial.nodes[a])
+            .collect();
+        let rim_center = mean(if rim.is_empty() { &initial.nodes } else { &rim });
+        let reach = rim
+            .iter()
+            .map(|&x| horizontal_distance(&up, x, rim_center))
+            .fold(0.0, f64::max);
+        let pedestal = match scenario {
+            Some(s) => find_pedestal(s, &up, rim_center, reach, time),
+            None => Err("no scenario to find it in".to_owned()),
+        };
+        let (pedestal_radius, pedestal_source) = match (given.pedestal_radius, &pedestal) {
+            (Some(r), _) => (r, "given".to_owned()),
+            (None, Ok(p)) => (p.radius, format!("obstacle[{}]", p.index)),
+            (None, Err(reason)) => {
+                return Err(MeasureError::NoPedestal {
+                    reason: reason.clone(),
+                });
+            }
+        };
+        let axis = pedestal.as_ref().ok().map(|p| p.axis_point);
+        let (specimen_radius, specimen_source, disc_center) = match given.specimen_radius {
+            Some(r) => (r, "given".to_owned(), None),
+            None => {
+                let s = scenario.ok_or_else(|| MeasureError::NotADisc {
+                    reason: "no scenario to find it in".into(),
+                })?;
+                specimen_of(s, &up, &rim, rim_center)?
+            }
+        };
+        let center = axis.or(disc_center).unwrap_or(rim_center);
+        let mut tester = Self::new(center, vertical, pedestal_radius, specimen_radius)?;
+        tester.pedestal_source = pedestal_source;
+        tester.specimen_source = specimen_source;
+        Ok(tester)
+    }
+}
+
+/// The scenario's vertical: `−Σ f_i / |f_i|` over its `surface` and
+/// `gravity` loads (their force or acceleration), `+z` if there are none
+/// or they cancel.
+pub fn vertical_of(scenario: &Scenario) -> [f64; 3] {
+    let mut down = [0.0; 3];
+    for load in &scenario.loads {
+        if !matches!(load.kind, LoadKindSpec::Surface | LoadKindSpec::Gravity) {
+            continue;
+        }
+        if let Some(f) = load.force.or(load.acceleration) {
+            let length = vec3::norm(f);
+            if length.is_finite() && length > 0.0 {
+                down = vec3::add(down, vec3::scale(f, 1.0 / length));
+            }
+        }
+    }
+    let length = vec3::norm(down);
+    if length > 1e-12 {
+        // (+ 0.0: no negative zeros in the report.)
+        down.map(|c| -c / length + 0.0)
+    } else {
+        [0.0, 0.0, 1.0]
+    }
+}
+
+/// The pedestal found in a scenario.
+struct Pedestal {
+    /// Its index among the `[[obstacle]]` tables.
+    index: usize,
+    /// A point on its axis at the frame's time (m).
+    axis_point: [f64; 3],
+    /// Its radius (m).
+    radius: f64,
+}
+
+/// The vertical cylinder whose axis passes nearest `rim_center`, within
+/// `reach`; or why there is none.
+fn find_pedestal(
+    scenario: &Scenario,
+    up: &Horizontal,
+    rim_center: [f64; 3],
+    reach: f64,
+    time: f64,
+) -> Result<Pedestal, String> {
+    let cos_tolerance = VERTICAL_TOLERANCE_DEGREES.to_radians().cos();
+    let mut cylinders = 0;
+    let mut vertical = 0;
+    let mut best: Option<(f64, Pedestal)> = None;
+    for (index, obstacle) in scenario.obstacles.iter().enumerate() {
+        let ObstacleSpec::Cylinder(c) = obstacle else {
+            continue;
+        };
+        cylinders += 1;
+        let length = vec3::norm(c.axis);
+        if length.is_nan()
+            || length <= 0.0
+            || vec3::dot(c.axis, up.vertical()).abs() < cos_tolerance * length
+        {
+            continue;
+        }
+        vertical += 1;
+        let moved = vec3::add(c.center, vec3::scale(c.velocity.unwrap_or([0.0; 3]), time));
+        let distance = horizontal_distance(up, moved, rim_center);
+        if distance <= reach && best.as_ref().is_none_or(|(d, _)| distance < *d) {
+            let pedestal = Pedestal {
+                index,
+                axis_point: moved,
+                radius: c.radius,
+            };
+            best = Some((distance, pedestal));
+        }
+    }
+    let k = up.vertical();
+    match best {
+        Some((_, p)) => Ok(p),
+        None if cylinders == 0 => {
+            Err("the scenario has no [[obstacle]] of shape \"cylinder\"".into())
+        }
+        None if vertical == 0 => Err(format!(
+            "no cylinder obstacle has its axis along the vertical [{}, {}, {}] (within {VERTICAL_TOLERANCE_DEGREES} degree)",
+            k[0], k[1], k[2]
+        )),
+        None => Err(format!(
+            "no vertical cylinder obstacle stands under the specimen (its axis within {reach} m of the initial rim's centre [{}, {}, {}])",
+            rim_center[0], rim_center[1], rim_center[2]
+        )),
+    }
+}
+
+/// The specimen's radius from the scenario's mesh, its source and the
+/// centre of a generated disc; `rim` are the initial mesh's boundary nodes
+/// and `center` their centroid (the specimen's radius is its own, wherever
+/// it lies on the pedestal).
+fn specimen_of(
+    scenario: &Scenario,
+    up: &Horizontal,
+    rim: &[[f64; 3]],
+    center: [f64; 3],
+) -> Result<(f64, String, Option<[f64; 3]>), MeasureError> {
+    let not_a_disc = |reason: String| MeasureError::NotADisc { reason };
+    match scenario.mesh.shape {
+        MeshShape::Disc => {
+            let radius = scenario
+                .mesh
+                .radius
+                .ok_or_else(|| not_a_disc("the [mesh] disc has no radius".into()))?;
+            let cos_tolerance = VERTICAL_TOLERANCE_DEGREES.to_radians().cos();
+            let k = up.vertical();
+            if k[2].abs() < cos_tolerance {
+                return Err(not_a_disc(format!(
+                    "the [mesh] disc lies in a plane z = constant, which is not horizontal for the vertical [{}, {}, {}]",
+                    k[0], k[1], k[2]
+                )));
+            }
+            let disc_center = scenario.mesh.center.unwrap_or([0.0; 3]);
+            Ok((radius, "mesh.radius".into(), Some(disc_center)))
+        }
+        MeshShape::File => {
+            if rim.is_empty() {
+                return Err(not_a_disc("the initial mesh has no free edge".into()));
+            }
+            let radii: Vec<f64> = rim
+                .iter()
+                .map(|&x| horizontal_distance(up, x, center))
+                .collect();
+            let largest = radii.iter().copied().fold(0.0, f64::max);
+            let smallest = radii.iter().copied().fold(f64::INFINITY, f64::min);
+            if largest.is_nan() || largest <= 0.0 || largest - smallest > RIM_TOLERANCE * largest {
+                return Err(not_a_disc(format!(
+                    "the initial mesh's rim is not a circle: its nodes lie {smallest} m to {largest} m from their centroid [{}, {}, {}]",
+                    center[0], center[1], center[2]
+                )));
+            }
+            Ok((largest, "initial rim".into(), None))
+        }
+        MeshShape::Rectangle => Err(not_a_disc("the [mesh] is a rectangle, not a disc".into())),
+    }
+}
+
+/// The distance between `a` and `b` in the horizontal plane.
+fn horizontal_distance(up: &Horizontal, a: [f64; 3], b: [f64; 3]) -> f64 {
+    let d = vec3::sub(a, b);
+    let k = up.vertical();
+    vec3::norm(vec3::sub(d, vec3::scale(k, vec3::dot(d, k))))
+}
+
+/// The mean of the points (the origin for none).
+fn mean(points: &[[f64; 3]]) -> [f64; 3] {
+    if points.is_empty() {
+        return [0.0; 3];
+    }
+    let sum = points.iter().fold([0.0; 3], |s, &x| vec3::add(s, x));
+    vec3::scale(sum, 1.0 / points.len() as f64)
+}
