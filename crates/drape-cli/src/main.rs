@@ -17,6 +17,7 @@ use std::time::Instant;
 
 mod alloc;
 mod examples;
+mod measure;
 
 /// Transparent huge pages for the large arrays of big meshes (see [`alloc`]).
 #[global_allocator]
@@ -133,6 +134,29 @@ enum Command {
         #[arg(long)]
         size: Option<String>,
     },
+    /// Measure a drape as a drape tester does (ISO 9073-9): the shadow's
+    /// area, the drape coefficient and the folds of one frame, as one JSON
+    /// object on standard output.
+    ///
+    /// The pedestal (a cylinder obstacle) and the specimen (a disc mesh)
+    /// are found in DIR/scenario.toml, or given; the vertical is opposite
+    /// the scenario's weight (+z without one).
+    Measure {
+        /// The output directory of a run (or its fields.pvd).
+        dir: PathBuf,
+        /// The frame of this step [default: the last].
+        #[arg(long, conflicts_with = "time")]
+        step: Option<u64>,
+        /// The frame nearest this time (s).
+        #[arg(long)]
+        time: Option<f64>,
+        /// The pedestal's radius r_p (m), instead of the scenario's cylinder.
+        #[arg(long, value_name = "R")]
+        pedestal_radius: Option<f64>,
+        /// The specimen's radius R (m), instead of the scenario's disc.
+        #[arg(long, value_name = "R")]
+        specimen_radius: Option<f64>,
+    },
     /// List the bundled example scenarios, or print or write one.
     Example {
         /// Example name (as listed); without it, list them.
@@ -216,6 +240,25 @@ fn main() -> ExitCode {
             range,
         }),
         Command::Plot { dir, output, size } => plot(&dir, output, size.as_deref()),
+        Command::Measure {
+            dir,
+            step,
+            time,
+            pedestal_radius,
+            specimen_radius,
+        } => measure::run(&measure::MeasureArgs {
+            dir,
+            frame: match (step, time) {
+                (Some(s), _) => drape_render::FrameSelect::Step(s),
+                (_, Some(t)) => drape_render::FrameSelect::Time(t),
+                _ => drape_render::FrameSelect::Last,
+            },
+            given: drape::measure::Given {
+                pedestal_radius,
+                specimen_radius,
+            },
+        })
+        .map_err(Failure::Input),
         Command::Example { name, write } => example(name.as_deref(), write.as_deref()),
     };
     match result {

@@ -1,0 +1,298 @@
+//! `drape measure` (SPEC §6.4, issue 22) on the outputs of real runs and of
+//! a frame written by hand: the JSON object's keys and values, the frame
+//! chosen, and the bad inputs — no outputs, a step not written, no disc on
+//! a cylinder, a radius that cannot be — each refused with exit status 2
+//! and a message that names the path, the step or the value.
+
+use drape::output::pvd::{PvdWriter, frame_relative_path};
+use drape::output::vtu::{DataArray, Frame, Values, write_vtu};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Keys of the JSON object, in their order (README "Measuring a drape").
+const KEYS: [&str; 13] = [
+    "step",
+    "time",
+    "shadow_area",
+    "drape_coefficient",
+    "folds",
+    "pedestal_radius",
+    "specimen_radius",
+    "shadow_area_error_bound",
+    "pedestal_radius_from",
+    "specimen_radius_from",
+    "vertical",
+    "center",
+    "frame",
+];
+
+fn drape(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_drape"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// A fresh directory for one test, under the system's temporary one.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("drape-measure-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn example(name: &str) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../examples/{name}.toml"));
+    std::fs::read_to_string(path).unwrap()
+}
+
+/// `text` cut to 3 fixed steps of 10 ms (first contact is at 0.1 s: the
+/// fabric is still flat), a frame each.
+fn three_steps(text: &str) -> String {
+    text.lines()
+        .filter(|l| {
+            !["adaptive", "dt_max", "rest ="]
+                .iter()
+                .any(|k| l.starts_with(k))
+        })
+        .map(|l| {
+            if l.starts_with("segments") {
+                "segments = [ { steps = 3, dt = 0.01 } ]".to_owned()
+            } else if l.starts_with("every =") {
+                "every = 1".to_owned()
+            } else {
+                l.to_owned()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// Runs `text` into `dir/out`.
+fn run(dir: &Path, text: &str) -> PathBuf {
+    let scenario = dir.join("scenario-in.toml");
+    std::fs::write(&scenario, text).unwrap();
+    let out = dir.join("out");
+    let o = drape(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out
+}
+
+/// `drape measure` that succeeds: its JSON object, checked for the keys.
+fn measured(args: &[&str]) -> Value {
+    let o = drape(&[&["measure"], args].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert_eq!(text.lines().count(), 1, "one line: {text}");
+    let v: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(v.as_object().unwrap().len(), KEYS.len(), "{text}");
+    let at: Vec<usize> = KEYS
+        .iter()
+        .map(|k| {
+            text.find(&format!("\"{k}\":"))
+                .unwrap_or_else(|| panic!("no {k}: {text}"))
+        })
+        .collect();
+    assert!(
+        at.windows(2).all(|w| w[0] < w[1]),
+        "keys out of order: {text}"
+    );
+    v
+}
+
+/// `drape measure` that is refused as bad input: its message.
+fn refused(args: &[&str]) -> String {
+    let o = drape(&[&["measure"], args].concat());
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(o.stdout.is_empty());
+    String::from_utf8(o.stderr).unwrap()
+}
+
+#[test]
+fn drape_tester_frames_are_measured() {
+    let dir = scratch("tester");
+    let out = run(&dir, &three_steps(&example("drape-tester")));
+    let out_s = out.to_str().unwrap();
+    // Step 0: the flat disc, DC = 1 within 0.5 % (the 90-gon inscribed in
+    // the circle: 1 − 0.13 %).
+    let v = measured(&[out_s, "--step", "0"]);
+    assert_eq!(v["step"], 0);
+    assert_eq!(v["time"], 0.0);
+    let dc = v["drape_coefficient"].as_f64().unwrap();
+    assert!((dc - 1.0).abs() < 0.005, "{dc}");
+    assert_eq!(v["folds"], 0);
+    assert_eq!(v["pedestal_radius"], 0.09);
+    assert_eq!(v["specimen_radius"], 0.15);
+    assert_eq!(v["pedestal_radius_from"], "obstacle[0]");
+    assert_eq!(v["specimen_radius_from"], "mesh.radius");
+    assert_eq!(v["vertical"], serde_json::json!([0.0, 0.0, 1.0]));
+    let area = v["shadow_area"].as_f64().unwrap();
+    let polygon = 45.0 * 0.15f64.powi(2) * (std::f64::consts::TAU / 90.0).sin();
+    assert!((area - polygon).abs() < 1e-14, "{area} vs {polygon}");
+    assert!(v["frame"].as_str().unwrap().ends_with("step_000000.vtu"));
+    // The last frame by default; the nearest by time.
+    assert_eq!(measured(&[out_s])["step"], 3);
+    assert_eq!(measured(&[out_s, "--time", "0.011"])["step"], 1);
+    // A radius given takes the place of the one found.
+    let v = measured(&[out_s, "--step", "0", "--pedestal-radius", "0.05"]);
+    assert_eq!(v["pedestal_radius"], 0.05);
+    assert_eq!(v["pedestal_radius_from"], "given");
+    let pi = std::f64::consts::PI;
+    let dc = (area - pi * 0.05 * 0.05) / (pi * (0.15 * 0.15 - 0.05 * 0.05));
+    assert!((v["drape_coefficient"].as_f64().unwrap() - dc).abs() < 1e-12);
+
+    // A step that was not written names the step and the collection.
+    let e = refused(&[out_s, "--step", "7"]);
+    assert!(
+        e.contains("step 7 was not written") && e.contains("fields.pvd"),
+        "{e}"
+    );
+    // Radii that cannot be name their values.
+    let e = refused(&[out_s, "--pedestal-radius", "0.2"]);
+    assert!(e.contains("0.2") && e.contains("not smaller"), "{e}");
+    let e = refused(&[out_s, "--specimen-radius=-1"]);
+    assert!(e.contains("specimen radius -1"), "{e}");
+    // --step and --time together.
+    refused(&[out_s, "--step", "0", "--time", "0"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_directory_without_outputs_is_refused() {
+    let dir = scratch("empty");
+    let e = refused(&[dir.to_str().unwrap()]);
+    assert!(
+        e.contains(&format!("{}", dir.join("fields.pvd").display())),
+        "{e}"
+    );
+    let missing = dir.join("nowhere");
+    let e = refused(&[missing.to_str().unwrap()]);
+    assert!(
+        e.contains("nowhere") && e.contains("not a directory"),
+        "{e}"
+    );
+    // A collection that lists no frame.
+    std::fs::write(
+        dir.join("fields.pvd"),
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\"><Collection>\n</Collection></VTKFile>\n",
+    )
+    .unwrap();
+    let e = refused(&[dir.to_str().unwrap()]);
+    assert!(e.contains("no frames"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The square fabric on a box (fabric-on-pedestal.toml): no disc, no
+/// cylinder; measured once both radii are given.
+#[test]
+fn a_scenario_that_is_not_a_disc_on_a_cylinder_needs_the_radii() {
+    let dir = scratch("square");
+    let out = run(&dir, &three_steps(&example("fabric-on-pedestal")));
+    let out_s = out.to_str().unwrap();
+    let scenario = out.join("scenario.toml");
+    let e = refused(&[out_s]);
+    assert!(
+        e.contains(&scenario.display().to_string())
+            && e.contains("cylinder")
+            && e.contains("--pedestal-radius"),
+        "{e}"
+    );
+    let e = refused(&[out_s, "--pedestal-radius", "0.05"]);
+    assert!(
+        e.contains(&scenario.display().to_string())
+            && e.contains("rectangle")
+            && e.contains("--specimen-radius"),
+        "{e}"
+    );
+    let v = measured(&[
+        out_s,
+        "--step",
+        "0",
+        "--pedestal-radius",
+        "0.05",
+        "--specimen-radius",
+        "0.1",
+    ]);
+    // The flat 0.2 m square: its shadow is its area.
+    assert!((v["shadow_area"].as_f64().unwrap() - 0.04).abs() < 1e-14);
+    // Without the scenario at all, the radii are all it takes.
+    std::fs::remove_file(&scenario).unwrap();
+    let e = refused(&[out_s]);
+    assert!(e.contains("(not found)"), "{e}");
+    measured(&[
+        out_s,
+        "--pedestal-radius",
+        "0.05",
+        "--specimen-radius",
+        "0.1",
+    ]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A frame written by hand next to the drape tester's scenario: the disc
+/// hanging straight down round the pedestal, DC near 0.
+#[test]
+fn a_disc_hanging_straight_down_measures_dc_near_zero() {
+    let dir = scratch("hanging");
+    std::fs::write(dir.join("scenario.toml"), example("drape-tester")).unwrap();
+    let (r_p, radius, rings) = (0.09, 0.15, 15);
+    let mesh =
+        drape::mesh::generate::disc(radius, rings, [0.0; 3], drape::mesh::ElementOrder::Linear);
+    let hanging: Vec<[f64; 3]> = mesh
+        .nodes
+        .iter()
+        .map(|&x| {
+            let r = x[0].hypot(x[1]);
+            if r <= r_p + 1e-12 {
+                x
+            } else {
+                let t = x[1].atan2(x[0]);
+                [r_p * t.cos(), r_p * t.sin(), -(r - r_p)]
+            }
+        })
+        .collect();
+    let displacement: Vec<f64> = hanging
+        .iter()
+        .zip(&mesh.nodes)
+        .flat_map(|(y, x)| [y[0] - x[0], y[1] - x[1], y[2] - x[2]])
+        .collect();
+    let rel = frame_relative_path(40);
+    std::fs::create_dir_all(dir.join("fields")).unwrap();
+    let frame = Frame {
+        positions: &hanging,
+        connectivity: &mesh.connectivity,
+        nodes_per_element: 3,
+        point_data: vec![DataArray {
+            name: "displacement",
+            components: 3,
+            values: Values::F64(&displacement),
+            component_names: &[],
+        }],
+        cell_data: vec![],
+        time: 2.5,
+    };
+    write_vtu(&dir.join(&rel), &frame).unwrap();
+    PvdWriter::new(dir.join("fields.pvd"))
+        .push(2.5, &rel)
+        .unwrap();
+    let v = measured(&[dir.to_str().unwrap()]);
+    assert_eq!(v["step"], 40);
+    assert_eq!(v["time"], 2.5);
+    let dc = v["drape_coefficient"].as_f64().unwrap();
+    // Between the pedestal's inscribed 54-gon (−0.13 %) and its circle (0).
+    assert!((-0.002..=0.0).contains(&dc), "{dc}");
+    assert_eq!(v["folds"], 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
