@@ -20,9 +20,70 @@ or ``python -m drape sweep sweep.toml --out out/sweep``. The README's
 "Python" section describes both in full.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from ._drape import RunResult, __version__, check, run
 from ._errors import DrapeError, OutputError, RunError, ScenarioError, SweepError
-from ._sweep import sweep
+
+if TYPE_CHECKING:
+    import os
+    from typing import Any, Dict, List, Optional, Union
+
+
+def sweep(
+    path: Union[str, "os.PathLike[str]"],
+    out: Union[str, "os.PathLike[str]", None] = None,
+    workers: Optional[int] = None,
+    engine: str = "local",
+    address: Optional[str] = None,
+    *,
+    progress: Optional[bool] = None,
+) -> List[Dict[str, Any]]:
+    """Runs one scenario over a grid of parameter values.
+
+    Args:
+        path: the sweep file: ``base`` (the scenario, relative to it),
+            ``mode`` (``"grid"`` or ``"zip"``) and ``[parameters]`` (dotted
+            keys -> lists of values), as the README's "Python" section
+            describes.
+        out: the sweep's directory [default: ``out/<sweep stem>``]: it gets
+            ``cases/NNNN/`` (each case's ``scenario.toml`` and outputs) and
+            ``results.csv``.
+        workers: cases at once (``local``), or the CPUs of the local Ray or
+            Dask cluster started when no ``address`` is given [default:
+            the CPUs of this machine].
+        engine: ``"local"`` (processes on this machine), ``"ray"`` or
+            ``"dask"`` (their optional extras: ``pip install "drape[ray]"``).
+        address: the Ray or Dask cluster to use; it must see ``out`` at the
+            same path and have drape installed.
+        progress: draw a progress bar on stderr; default: when stderr is a
+            terminal.
+
+    Returns:
+        The rows of ``results.csv``, one dict per case in case order:
+        ``case``, ``status`` (``completed``, ``failed``, ``interrupted`` or
+        ``pending``), one entry per parameter, ``steps``, ``time``,
+        ``newton_iterations``, ``wall_seconds``, ``first_contact_time``,
+        ``<monitor>_x``/``_y``/``_z`` (final positions) and ``message``.
+
+    Raises:
+        SweepError: the sweep file cannot be run (nothing ran).
+        ImportError: the engine's package is not installed (nothing ran).
+        KeyboardInterrupt: Ctrl-C, after ``results.csv`` was written with
+            what was done; calling it again finishes the sweep.
+
+    Cases completed by an earlier call with the same scenario text are not
+    run again; a failed case runs again; an interrupted one resumes from
+    its checkpoint.
+    """
+    # The sweeps' modules load when a sweep runs: `import drape` for a run
+    # stays light.
+    from ._sweep import sweep as run_sweep
+
+    return run_sweep(path, out=out, workers=workers, engine=engine, address=address, progress=progress)
+
 
 __all__ = [
     "run",

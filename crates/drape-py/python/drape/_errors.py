@@ -8,8 +8,11 @@ them across processes).
 
 from __future__ import annotations
 
-from pathlib import Path
-from typing import Any, Optional
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # `import drape` stays light: these are for the annotations
+    from pathlib import Path
+    from typing import Any, Optional
 
 
 class DrapeError(Exception):

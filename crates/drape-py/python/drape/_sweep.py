@@ -247,41 +247,7 @@ def sweep(
     *,
     progress: Optional[bool] = None,
 ) -> List[Dict[str, Any]]:
-    """Runs one scenario over a grid of parameter values.
-
-    Args:
-        path: the sweep file (``base``, ``mode``, ``[parameters]``; see the
-            module's docstring and the README).
-        out: the sweep's directory [default: ``out/<sweep stem>``]: it gets
-            ``cases/NNNN/`` (each case's ``scenario.toml`` and outputs) and
-            ``results.csv``.
-        workers: cases at once (``local``), or the CPUs of the local Ray or
-            Dask cluster started when no ``address`` is given [default:
-            the CPUs of this machine].
-        engine: ``"local"`` (processes on this machine), ``"ray"`` or
-            ``"dask"`` (their optional extras: ``pip install "drape[ray]"``).
-        address: the Ray or Dask cluster to use; it must see ``out`` at the
-            same path and have drape installed.
-        progress: draw a progress bar on stderr; default: when stderr is a
-            terminal.
-
-    Returns:
-        The rows of ``results.csv``, one dict per case in case order:
-        ``case``, ``status`` (``completed``, ``failed``, ``interrupted`` or
-        ``pending``), one entry per parameter, ``steps``, ``time``,
-        ``newton_iterations``, ``wall_seconds``, ``first_contact_time``,
-        ``<monitor>_x``/``_y``/``_z`` (final positions) and ``message``.
-
-    Raises:
-        SweepError: the sweep file cannot be run (nothing ran).
-        ImportError: the engine's package is not installed (nothing ran).
-        KeyboardInterrupt: Ctrl-C, after ``results.csv`` was written with
-            what was done; calling it again finishes the sweep.
-
-    Cases completed by an earlier call with the same scenario text are not
-    run again; a failed case runs again; an interrupted one resumes from
-    its checkpoint.
-    """
+    """:func:`drape.sweep` (its docstring says what it does)."""
     if engine not in ENGINES:
         raise ValueError(f"engine={engine!r}: expected one of {', '.join(ENGINES)}")
     if workers is not None and (not isinstance(workers, int) or workers < 1):
