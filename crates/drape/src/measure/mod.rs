@@ -18,13 +18,13 @@
 //!
 //! The measurement of one state of the fabric goes in three parts:
 //!
-//! - [`shadow`]: the area of the union of the elements' projections on the
-//!   horizontal plane, folds that overlap counted once (an exact polygon
-//!   union of the flat triangles; curved T6 and T10 elements through
-//!   sub-triangles, refined until a stated error bound is small), and the
-//!   shadow's outline;
+//! - [`shadow`](mod@shadow): the area of the union of the elements'
+//!   projections on the horizontal plane, folds that overlap counted once
+//!   (an exact polygon union of the flat triangles; curved T6 and T10
+//!   elements through sub-triangles, refined until a stated error bound is
+//!   small), and the shadow's outline;
 //! - [`folds`]: the outline's radius as a function of the angle round the
-//!   pedestal's axis, smoothed, and its prominent maxima counted;
+//!   shadow's centroid, smoothed, and its prominent maxima counted;
 //! - [`tester`]: the geometry of the instrument — the vertical (opposite
 //!   the scenario's weight), the pedestal's axis and radius (a cylinder
 //!   obstacle under the specimen) and the specimen's radius (a `disc`
