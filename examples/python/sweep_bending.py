@@ -18,7 +18,9 @@ the pedestal, as a fraction of the flat disc's area outside it (ISO 9073-9)
 — grows with the bending rigidity, from about 0.35 to 0.98 over the range,
 and the rim hangs less far below the pedestal's top (5 cm below the disc).
 The shadow is measured here as the area inside the projected rim (the rim
-is the outermost part of a draped disc).
+is the outermost part of a draped disc); `drape measure DIR/cases/NNNN`,
+which takes the exact union of the projected elements, gives the same
+coefficients to three digits (0.346 and 0.952 for B = 2e-5 and 1.6e-4 N m).
 """
 
 from __future__ import annotations
