@@ -152,7 +152,8 @@ pub struct Orthotropic {
 }
 
 fn mat_vec(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
-    [0, 1, 2].map(|r| m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2])
+    let row = |r: &[f64; 3]| r[0] * v[0] + r[1] * v[1] + r[2] * v[2];
+    [row(&m[0]), row(&m[1]), row(&m[2])]
 }
 
 fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -162,6 +163,11 @@ fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// `t(theta) = [c^2, s^2, c s]` and its first two derivatives.
 fn directions(theta: f64) -> [[f64; 3]; 3] {
     let (s, c) = theta.sin_cos();
+    directions_of(c, s)
+}
+
+/// [`directions`] from `c = cos theta`, `s = sin theta`.
+fn directions_of(c: f64, s: f64) -> [[f64; 3]; 3] {
     let (cc, ss, cs) = (c * c, s * s, c * s);
     [
         [cc, ss, cs],
@@ -277,63 +283,88 @@ impl Orthotropic {
         // The best sample, and the major principal strain direction
         // (where t . e = E1 > 0, so there is always a candidate).
         let step = std::f64::consts::PI / self.grid.len() as f64;
-        let principal = n1[1].atan2(n1[0]).rem_euclid(std::f64::consts::PI);
-        let value = |theta: f64| {
-            let t = directions(theta)[0];
+        let value = |t: [f64; 3], modulus: f64| {
             let p = dot3(t, e);
-            p * p / dot3(t, mat_vec(a, t))
+            if p > 0.0 { p * p * modulus } else { 0.0 }
         };
-        let mut best = (principal, value(principal));
+        let pt = directions_of(n1[0], n1[1])[0];
+        let mut best = (None, value(pt, 1.0 / dot3(pt, mat_vec(a, pt))));
         for (i, s) in self.grid.iter().enumerate() {
-            let p = dot3(s.t, e);
-            if p > 0.0 {
-                let g = p * p * s.modulus;
-                if g > best.1 {
-                    best = (step * i as f64, g);
-                }
+            let g = value(s.t, s.modulus);
+            if g > best.1 {
+                best = (Some(i), g);
             }
         }
-        // h(theta) = 2 p' q - p q' and its derivative.
-        let h = |theta: f64| {
-            let [t, t1, t2] = directions(theta);
+        // The start: the principal direction, or the vertex of the
+        // parabola through the best sample and its neighbours (which
+        // brackets a maximum).
+        let (mut theta, mut cs, centre) = match best.0 {
+            None => {
+                let theta = n1[1].atan2(n1[0]).rem_euclid(std::f64::consts::PI);
+                (theta, (n1[0], n1[1]), theta)
+            }
+            Some(i) => {
+                let n = self.grid.len();
+                let at = |k: usize| value(self.grid[k].t, self.grid[k].modulus);
+                let (gm, gp) = (at((i + n - 1) % n), at((i + 1) % n));
+                let curvature = gm - 2.0 * best.1 + gp;
+                let shift = 0.5 * step * (gm - gp) / curvature;
+                let shift = if shift.is_finite() {
+                    shift.clamp(-step, step)
+                } else {
+                    0.0
+                };
+                let theta = step * i as f64 + shift;
+                let (s, c) = theta.sin_cos();
+                (theta, (c, s), step * i as f64)
+            }
+        };
+        // Newton on h(theta) = 2 p' q - p q' (the sign of dW/dtheta),
+        // kept inside the bracket of the neighbouring samples and
+        // bisected there when it steps out; h > 0 left of the maximum.
+        let (mut lo, mut hi) = (centre - step, centre + step);
+        let mut dirs;
+        let mut iterations = 0;
+        loop {
+            dirs = directions_of(cs.0, cs.1);
+            let [t, t1, t2] = dirs;
             let (at, at1) = (mat_vec(a, t), mat_vec(a, t1));
             let (p, p1, p2) = (dot3(t, e), dot3(t1, e), dot3(t2, e));
             let q = dot3(t, at);
             let q1 = 2.0 * dot3(t1, at);
             let q2 = 2.0 * (dot3(t2, at) + dot3(t1, at1));
-            (2.0 * p1 * q - p * q1, 2.0 * p2 * q + p1 * q1 - p * q2)
-        };
-        let (mut lo, mut hi) = (best.0 - step, best.0 + step);
-        let bracketed = h(lo).0 > 0.0 && h(hi).0 < 0.0;
-        let mut theta = best.0;
-        for _ in 0..100 {
-            let (f, df) = h(theta);
-            if f == 0.0 {
+            let f = 2.0 * p1 * q - p * q1;
+            let df = 2.0 * p2 * q + p1 * q1 - p * q2;
+            iterations += 1;
+            if f == 0.0 || iterations > 100 {
                 break;
             }
-            if bracketed {
-                if f > 0.0 {
-                    lo = theta;
-                } else {
-                    hi = theta;
-                }
+            if f > 0.0 {
+                lo = theta;
+            } else {
+                hi = theta;
             }
             let mut next = theta - f / df;
             if !(next > lo && next < hi && next.is_finite()) {
                 next = 0.5 * (lo + hi);
             }
-            let done = (next - theta).abs() <= 2e-15;
-            theta = next;
-            if done || (hi - lo) <= 1e-15 {
+            if (next - theta).abs() <= 2e-15 || hi - lo <= 2e-15 {
                 break;
             }
+            theta = next;
+            let (s, c) = theta.sin_cos();
+            cs = (c, s);
         }
-        let [t, t1, t2] = directions(theta);
+        let [t, t1, t2] = dirs;
         let (at, at1) = (mat_vec(a, t), mat_vec(a, t1));
         let q = dot3(t, at);
         let sigma = dot3(t, e) / q;
         let t1at = dot3(t1, at);
-        let w_te = [0, 1, 2].map(|i| sigma * t1[i] - sigma * t1at * t[i] / q);
+        let w_te = [
+            sigma * t1[0] - sigma * t1at * t[0] / q,
+            sigma * t1[1] - sigma * t1at * t[1] / q,
+            sigma * t1[2] - sigma * t1at * t[2] / q,
+        ];
         let w_tt = sigma * sigma * t1at * t1at / q + sigma * dot3(t2, e)
             - sigma * sigma * (dot3(t2, at) + dot3(t1, at1));
         Some(Tension {
