@@ -557,7 +557,7 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
         a.size.as_deref(),
         if a.animate { (800, 600) } else { (1200, 900) },
     )?;
-    let opts = RenderOptions {
+    let mut opts = RenderOptions {
         layout: if a.animate {
             Layout::Animation {
                 frame_delay_ms: a.delay_ms,
@@ -582,6 +582,16 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
         range: a.range.map(|r| (r[0], r[1])),
         ..Default::default()
     };
+    // A drape tester seen from above: the pedestal and the specimen's
+    // circle over the fabric, the measurement in the subtitle.
+    if a.view == "top"
+        && opts.layout == Layout::Single
+        && !a.no_obstacles
+        && let Some((circles, caption)) = measure::top_view_overlay(&a.dir, opts.frame)
+    {
+        opts.circles = circles;
+        opts.caption = Some(caption);
+    }
     let report = drape_render::render(&a.dir, &opts).map_err(input)?;
     for n in &report.notices {
         eprintln!("note: {n}");
@@ -593,9 +603,12 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
 }
 
 fn plot(dir: &Path, output: Option<PathBuf>, size: Option<&str>) -> Result<(), Failure> {
-    let (width, height) = parse_size(size, (1200, 900))?;
+    // A drape-tester run: its drape coefficient and folds frame by frame too.
+    let extra = measure::drape_panels(dir).unwrap_or_default();
+    let rows = if extra.is_empty() { 900 } else { 1200 };
+    let (width, height) = parse_size(size, (1200, rows))?;
     let out = output.unwrap_or_else(|| dir.join("plot.png"));
-    drape_render::plot(dir, &out, width, height)
+    drape_render::plot_with(dir, &out, width, height, &extra)
         .map_err(|e| Failure::Input(anyhow::Error::new(e)))?;
     println!("wrote {}", out.display());
     Ok(())

@@ -12,7 +12,7 @@ use anyhow::{Context, anyhow};
 use drape::measure::{self, DrapeTester, Given, MeasureError, Measurement, Surface};
 use drape::mesh::{ElementOrder, Mesh};
 use drape::scenario::Scenario;
-use drape_render::{FrameEntry, FrameSelect, OutputDir};
+use drape_render::{Circle, ExtraPanel, FrameEntry, FrameSelect, OutputDir};
 use std::path::{Path, PathBuf};
 
 /// What to measure: the run, its frame, the radii given.
@@ -234,4 +234,68 @@ fn initial_positions(frame: &drape_render::vtu::Frame) -> anyhow::Result<Vec<[f6
         .zip(u.values.chunks_exact(3))
         .map(|(x, u)| [x[0] - u[0], x[1] - u[1], x[2] - u[2]])
         .collect())
+}
+
+/// The drape tester drawn over a top view of frame `select` of `dir`: the
+/// pedestal's rim (solid) and the specimen's circle about its axis
+/// (dashed), with the measurement as a caption — a laboratory's picture of
+/// the shadow. `None` for a run that is not a drape tester.
+pub fn top_view_overlay(dir: &Path, select: FrameSelect) -> Option<(Vec<Circle>, String)> {
+    let run = Run::open(dir, Given::default()).ok()?;
+    let m = run.measure(run.out.select(select).ok()?).ok()?;
+    let t = &m.tester;
+    let circle = |radius: f64, color: [u8; 3], dashed: bool| Circle {
+        center: t.plane.origin(),
+        normal: t.plane.vertical(),
+        radius,
+        color,
+        dashed,
+    };
+    let caption = format!(
+        "drape coefficient {:.3}, {} folds",
+        m.measurement.drape_coefficient, m.measurement.folds
+    );
+    Some((
+        vec![
+            circle(t.pedestal_radius, [20, 20, 20], false),
+            circle(t.specimen_radius, [90, 90, 90], true),
+        ],
+        caption,
+    ))
+}
+
+/// The drape coefficient and the folds of every frame of a drape-tester
+/// run `dir`, as two plot panels; `None` for a run that is not a drape
+/// tester. A frame that cannot be measured is left out, with a note.
+pub fn drape_panels(dir: &Path) -> Option<Vec<ExtraPanel>> {
+    let run = Run::open(dir, Given::default()).ok()?;
+    // Not a drape tester: its first frame says so.
+    run.measure(0).ok()?;
+    let (mut time, mut dc, mut folds) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..run.out.frames.len() {
+        match run.measure(i) {
+            Ok(m) => {
+                time.push(m.entry.time);
+                dc.push(m.measurement.drape_coefficient);
+                folds.push(m.measurement.folds as f64);
+            }
+            Err(e) => eprintln!("note: left out of the drape coefficient: {e:#}"),
+        }
+    }
+    Some(vec![
+        ExtraPanel {
+            title: "Drape coefficient (ISO 9073-9)".into(),
+            y_label: "DC".into(),
+            time: time.clone(),
+            series: vec![("drape coefficient".into(), dc)],
+            integer: false,
+        },
+        ExtraPanel {
+            title: "Folds round the rim".into(),
+            y_label: "folds".into(),
+            time,
+            series: vec![("folds".into(), folds)],
+            integer: true,
+        },
+    ])
 }

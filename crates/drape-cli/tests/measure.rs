@@ -166,6 +166,61 @@ fn drape_tester_frames_are_measured() {
     assert!(e.contains("specimen radius -1"), "{e}");
     // --step and --time together.
     refused(&[out_s, "--step", "0", "--time", "0"]);
+
+    // `drape plot` adds the drape coefficient and the folds: two more
+    // panels, a taller figure.
+    let o = drape(&["plot", out_s]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let png = drape_render::RgbImage::read_png(&out.join("plot.png")).unwrap();
+    assert_eq!((png.width, png.height), (1200, 1200));
+    // `drape render --view top` draws the pedestal (solid, [20, 20, 20])
+    // and the specimen's circle (dashed, [90, 90, 90]) over the fabric: the
+    // pixels of those colours in the picture (below the title, left of the
+    // colour bar) lie on two rings about one centre, radii in the ratio
+    // r_p / R = 0.6.
+    let png = dir.join("top.png");
+    let o = drape(&[
+        "render",
+        out_s,
+        "--view",
+        "top",
+        "--step",
+        "0",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = drape_render::RgbImage::read_png(&png).unwrap();
+    let ring = |colour: [u8; 3]| -> (f64, f64) {
+        let pixels: Vec<(f64, f64)> = (100..img.height)
+            .flat_map(|y| (0..960).map(move |x| (x, y)))
+            .filter(|&(x, y)| img.get(x, y) == Some(colour))
+            .map(|(x, y)| (x as f64 + 0.5, y as f64 + 0.5))
+            .collect();
+        assert!(pixels.len() > 200, "{} pixels of {colour:?}", pixels.len());
+        let n = pixels.len() as f64;
+        let c = pixels
+            .iter()
+            .fold((0.0, 0.0), |s, p| (s.0 + p.0 / n, s.1 + p.1 / n));
+        let r: Vec<f64> = pixels
+            .iter()
+            .map(|p| (p.0 - c.0).hypot(p.1 - c.1))
+            .collect();
+        let (lo, hi) = (
+            r.iter().copied().fold(f64::INFINITY, f64::min),
+            r.iter().copied().fold(0.0, f64::max),
+        );
+        // A ring of a line 3 px wide.
+        assert!(hi - lo < 4.0, "{colour:?}: radii {lo} to {hi}");
+        (0.5 * (lo + hi), c.0.hypot(c.1))
+    };
+    let (pedestal, pc) = ring([20, 20, 20]);
+    let (specimen, sc) = ring([90, 90, 90]);
+    assert!((pc - sc).abs() < 2.0);
+    assert!(
+        (pedestal / specimen - 0.6).abs() < 0.01,
+        "{pedestal} / {specimen}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -202,6 +257,11 @@ fn a_scenario_that_is_not_a_disc_on_a_cylinder_needs_the_radii() {
     let out = run(&dir, &three_steps(&example("fabric-on-pedestal")));
     let out_s = out.to_str().unwrap();
     let scenario = out.join("scenario.toml");
+    // Not a drape tester: the plot is the history's alone.
+    let o = drape(&["plot", out_s]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let png = drape_render::RgbImage::read_png(&out.join("plot.png")).unwrap();
+    assert_eq!((png.width, png.height), (1200, 900));
     let e = refused(&[out_s]);
     assert!(
         e.contains(&scenario.display().to_string())

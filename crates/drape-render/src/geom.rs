@@ -92,7 +92,7 @@ fn quad(out: &mut Vec<Tri>, a: V3, b: V3, c: V3, d: V3) {
 }
 
 /// Orthonormal vectors perpendicular to `axis` (unit).
-fn basis(axis: V3) -> (V3, V3) {
+pub(crate) fn basis(axis: V3) -> (V3, V3) {
     let helper = if axis[0].abs() < 0.9 {
         [1.0, 0.0, 0.0]
     } else {

@@ -53,6 +53,7 @@ mod field;
 mod geom;
 mod image;
 mod outdir;
+mod overlay;
 mod plot;
 mod raster;
 mod render;
@@ -66,7 +67,8 @@ pub use error::{RenderError, Result};
 pub use field::{Field, FieldValues, WRINKLE_STATES, format_value};
 pub use image::RgbImage;
 pub use outdir::{FrameEntry, FrameSelect, History, OutputDir};
-pub use plot::{PlotReport, plot, plot_image};
+pub use overlay::Circle;
+pub use plot::{ExtraPanel, PlotReport, plot, plot_image, plot_image_with, plot_with};
 pub use raster::View;
 pub use render::{
     Layout, Projection, RenderOptions, RenderReport, default_output, render, render_image,

@@ -52,6 +52,23 @@ fn register_fonts() {
     });
 }
 
+/// A panel of values the caller computed at times of its own — one a
+/// frame, say: a drape tester's drape coefficient and folds — drawn after
+/// the history's panels by [`plot_with`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExtraPanel {
+    /// The panel's title.
+    pub title: String,
+    /// The y axis' label, with its unit.
+    pub y_label: String,
+    /// Times (s) of the values.
+    pub time: Vec<f64>,
+    /// Named series, one value a time.
+    pub series: Vec<(String, Vec<f64>)>,
+    /// Whole numbers (a count): integer ticks from 0.
+    pub integer: bool,
+}
+
 /// Plots the history of the output directory `dir` to the PNG `out`:
 /// monitored z, energies, Newton iterations, contact force, wrinkling state
 /// fractions and the smallest gap, against time.
@@ -61,6 +78,20 @@ fn register_fonts() {
 /// `history.csv`, [`RenderError::InvalidOption`] for a bad size or an
 /// output that is not `.png`, [`RenderError::Encode`] if drawing fails.
 pub fn plot(dir: &Path, out: &Path, width: u32, height: u32) -> Result<PlotReport> {
+    plot_with(dir, out, width, height, &[])
+}
+
+/// As [`plot`], with the panels `extra` after the history's (two a row).
+///
+/// # Errors
+/// As [`plot`].
+pub fn plot_with(
+    dir: &Path,
+    out: &Path,
+    width: u32,
+    height: u32,
+    extra: &[ExtraPanel],
+) -> Result<PlotReport> {
     let ext = out
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
@@ -71,7 +102,7 @@ pub fn plot(dir: &Path, out: &Path, width: u32, height: u32) -> Result<PlotRepor
             out.display()
         )));
     }
-    let (img, mut report) = plot_image(dir, width, height)?;
+    let (img, mut report) = plot_image_with(dir, width, height, extra)?;
     img.write_png(out)?;
     report.output = Some(out.to_owned());
     Ok(report)
@@ -82,6 +113,19 @@ pub fn plot(dir: &Path, out: &Path, width: u32, height: u32) -> Result<PlotRepor
 /// # Errors
 /// As [`plot`], except for writing.
 pub fn plot_image(dir: &Path, width: u32, height: u32) -> Result<(RgbImage, PlotReport)> {
+    plot_image_with(dir, width, height, &[])
+}
+
+/// As [`plot_with`], into memory.
+///
+/// # Errors
+/// As [`plot`], except for writing.
+pub fn plot_image_with(
+    dir: &Path,
+    width: u32,
+    height: u32,
+    extra: &[ExtraPanel],
+) -> Result<(RgbImage, PlotReport)> {
     if !(320..=10_000).contains(&width) || !(240..=10_000).contains(&height) {
         return Err(RenderError::InvalidOption(format!(
             "plot size {width}x{height}: width must be 320–10000 and height 240–10000 pixels"
@@ -232,6 +276,18 @@ pub fn plot_image(dir: &Path, width: u32, height: u32) -> Result<(RgbImage, Plot
     }
     gap.legend = false;
     panels.push(gap);
+
+    for e in extra {
+        let mut p = Panel::new(&e.title, &e.y_label);
+        p.x = Some(("time (s)", e.time.clone()));
+        for (k, (name, values)) in e.series.iter().enumerate() {
+            p.series
+                .push(Series::line(name, values.clone(), palette(k)));
+        }
+        p.integer_y = e.integer;
+        p.legend = e.series.len() > 1;
+        panels.push(p);
+    }
 
     let titles: Vec<String> = panels.iter().map(|p| p.title.clone()).collect();
     let (bw, bh) = (width * SS, height * SS);
@@ -388,7 +444,7 @@ fn draw_all(
         ))
         .map_err(|x| e(&x))?;
     }
-    let areas = rest.split_evenly((3, 2));
+    let areas = rest.split_evenly((panels.len().div_ceil(2).max(1), 2));
     for (area, p) in areas.iter().zip(panels) {
         let (x_desc, x) = match &p.x {
             Some((name, v)) => (*name, v.as_slice()),

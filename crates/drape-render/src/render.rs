@@ -9,6 +9,7 @@ use crate::field::{Field, FieldValues, WRINKLE_STATES, format_value};
 use crate::geom::{Aabb, V3, add, cross, normalize, obstacle_triangles, sub};
 use crate::image::RgbImage;
 use crate::outdir::{FrameEntry, FrameSelect, OutputDir};
+use crate::overlay::{Circle, stroke};
 use crate::raster::{Buffer, Camera, Paint, RasterTri, Style, View};
 use crate::scenario::{Obstacle, read_obstacles};
 use crate::text::{self, Align, Weight};
@@ -68,6 +69,12 @@ pub struct RenderOptions {
     pub shading: bool,
     /// Supersampling factor per axis for anti-aliasing (1–4).
     pub supersample: u32,
+    /// Circles stroked over single frames and animations, on top of
+    /// everything (a drape tester's pedestal and specimen); the camera
+    /// fits them in.
+    pub circles: Vec<Circle>,
+    /// Text added to the subtitle of a single frame (a measurement).
+    pub caption: Option<String>,
 }
 
 impl Default for RenderOptions {
@@ -86,6 +93,8 @@ impl Default for RenderOptions {
             edges: None,
             shading: true,
             supersample: 3,
+            circles: Vec::new(),
+            caption: None,
         }
     }
 }
@@ -256,6 +265,12 @@ fn check_options(opts: &RenderOptions) -> Result<()> {
     {
         return bad(format!("range {a} .. {b}: need finite min < max"));
     }
+    if let Some((i, c)) = opts.circles.iter().enumerate().find(|(_, c)| !c.is_valid()) {
+        return bad(format!(
+            "circle {i}: centre {:?}, normal {:?}, radius {}: need finite values, a normal and a positive radius",
+            c.center, c.normal, c.radius
+        ));
+    }
     Ok(())
 }
 
@@ -407,6 +422,8 @@ struct Scene {
     time_decimals: usize,
     /// The supersampled buffer, reused from frame to frame.
     buffer: std::cell::RefCell<Buffer>,
+    /// Points round each of [`RenderOptions::circles`].
+    circles: Vec<Vec<V3>>,
 }
 
 /// Sizes of the annotations of a figure `w` x `h`.
@@ -530,6 +547,7 @@ impl Scene {
             region,
             time_decimals,
             buffer: std::cell::RefCell::new(Buffer::new(0, 0)),
+            circles: opts.circles.iter().map(Circle::points).collect(),
         })
     }
 
@@ -621,6 +639,7 @@ impl Scene {
                 t.p.into_iter().for_each(&mut add);
             }
         }
+        self.circles.iter().flatten().for_each(|&p| add(p));
         ((hi[0] - lo[0]).max(1e-9), (hi[1] - lo[1]).max(1e-9))
     }
 
@@ -636,6 +655,7 @@ impl Scene {
                 pts.extend(t.p);
             }
         }
+        pts.extend(self.circles.iter().flatten().copied());
         cam.fit(pts.into_iter(), (0.0, 0.0, w, h));
         cam
     }
@@ -898,16 +918,26 @@ impl Scene {
         let (w, h) = (opts.width, opts.height);
         let mut img = RgbImage::new(w, h);
         let f = &self.frames[i];
-        let subtitle = format!(
+        let mut subtitle = format!(
             "{}   ·   step {}   ·   {}   ·   {} view",
             self.time_label(f.entry.time),
             f.entry.step,
             opts.field.description(),
             opts.view.name()
         );
+        if let Some(caption) = &opts.caption {
+            subtitle.push_str("   ·   ");
+            subtitle.push_str(caption);
+        }
         self.draw_title(&mut img, &l.m, &subtitle);
         let panel = self.draw_frame(opts, &l.cam, l.edges, i, l.pw, l.ph);
         img.paste(&panel, l.m.pad as usize, l.top as usize);
+        let projection = l.projection(opts);
+        let width = (w.min(h) as f64 / 400.0).max(1.5);
+        for (points, c) in self.circles.iter().zip(&opts.circles) {
+            let pixels: Vec<(f64, f64)> = points.iter().map(|&p| projection.pixel(p)).collect();
+            stroke(&mut img, &pixels, c.color, width, c.dashed);
+        }
         let x0 = w as f32 - l.band;
         self.draw_colorbar(&mut img, opts.field, &l.m, x0, l.top, h as f32 - l.m.pad);
         img

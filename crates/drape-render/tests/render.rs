@@ -5,8 +5,8 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use drape_render::{
-    Field, FrameSelect, Layout, RenderError, RenderOptions, RgbImage, View, WRINKLE_COLOURS,
-    format_value, gif_info, plot, render, render_image, viridis,
+    Circle, ExtraPanel, Field, FrameSelect, Layout, RenderError, RenderOptions, RgbImage, View,
+    WRINKLE_COLOURS, format_value, gif_info, plot, plot_image_with, render, render_image, viridis,
 };
 
 // ---------------------------------------------------------------- writer --
@@ -685,6 +685,107 @@ fn plot_writes_a_png_of_the_requested_size() {
         plot(&dir, &dir.join("p.gif"), 800, 600),
         Err(RenderError::InvalidOption(_))
     ));
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Circles (a drape tester's pedestal and specimen) are stroked over the
+/// fabric where the projection puts them, the camera fits them in, and a
+/// circle that cannot be is refused.
+#[test]
+fn circles_are_drawn_over_the_fabric() {
+    let dir = test_dir("circles");
+    write_run(&dir, &[two_heights(0, 0.0)]);
+    let red = [230, 20, 20];
+    // One over sheet A, one larger than the whole scene.
+    let circles = vec![
+        Circle {
+            center: [-0.6, 0.0, 0.0],
+            normal: [0.0, 0.0, 1.0],
+            radius: 0.2,
+            color: red,
+            dashed: false,
+        },
+        Circle {
+            center: [0.0, 0.0, 0.0],
+            normal: [0.0, 0.0, 1.0],
+            radius: 2.0,
+            color: red,
+            dashed: true,
+        },
+    ];
+    let opts = RenderOptions {
+        circles,
+        caption: Some("a caption".into()),
+        ..top_opts(&dir, "circles.png")
+    };
+    let (img, r) = render_image(&dir, &opts).unwrap();
+    let proj = r.projection.unwrap();
+    for t in [0.0f64, 1.0, 2.5, 4.0] {
+        let on = [-0.6 + 0.2 * t.cos(), 0.2 * t.sin(), 0.0];
+        assert_eq!(pixel_at(&img, proj.pixel(on)), red, "at angle {t}");
+    }
+    // Inside it the fabric; the large circle is inside the picture.
+    assert_eq!(pixel_at(&img, proj.pixel([-0.6, 0.0, 0.0])), viridis(1.0));
+    for p in [
+        [2.0, 0.0, 0.0],
+        [-2.0, 0.0, 0.0],
+        [0.0, 2.0, 0.0],
+        [0.0, -2.0, 0.0],
+    ] {
+        let (x, y) = proj.pixel(p);
+        assert!(
+            x > 0.0 && x < 1200.0 && y > 0.0 && y < 900.0,
+            "{p:?} at {x}, {y}"
+        );
+    }
+    let bad = RenderOptions {
+        circles: vec![Circle {
+            center: [0.0; 3],
+            normal: [0.0; 3],
+            radius: 0.1,
+            color: red,
+            dashed: false,
+        }],
+        ..top_opts(&dir, "bad.png")
+    };
+    assert!(
+        matches!(render(&dir, &bad), Err(RenderError::InvalidOption(m)) if m.contains("circle 0"))
+    );
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Panels computed by the caller (a drape tester's coefficient, frame by
+/// frame) come after the history's, two a row.
+#[test]
+fn extra_plot_panels_follow_the_history() {
+    let dir = test_dir("extra-panels");
+    write_run(&dir, &[two_heights(0, 0.0)]);
+    let extra = vec![
+        ExtraPanel {
+            title: "Drape coefficient".into(),
+            y_label: "DC".into(),
+            time: vec![0.0, 0.1, 0.2],
+            series: vec![("DC".into(), vec![1.0, 0.6, 0.5])],
+            integer: false,
+        },
+        ExtraPanel {
+            title: "Folds".into(),
+            y_label: "folds".into(),
+            time: vec![0.0, 0.1, 0.2],
+            series: vec![("folds".into(), vec![0.0, 6.0, 6.0])],
+            integer: true,
+        },
+    ];
+    let (img, r) = plot_image_with(&dir, 1000, 1000, &extra).unwrap();
+    assert_eq!(r.panels.len(), 8);
+    assert_eq!(r.panels[6..], ["Drape coefficient", "Folds"]);
+    assert_eq!((img.width, img.height), (1000, 1000));
+    // The last row is drawn: dark pixels (axes, lines, text) in its band.
+    let dark = (800..1000)
+        .flat_map(|y| (0..1000).map(move |x| (x, y)))
+        .filter(|&(x, y)| img.get(x, y).is_some_and(|p| p.iter().all(|&v| v < 100)))
+        .count();
+    assert!(dark > 500, "{dark} dark pixels in the last row");
     fs::remove_dir_all(&dir).unwrap();
 }
 
