@@ -22,6 +22,7 @@ mod build;
 mod check;
 mod contact;
 mod locate;
+mod material;
 mod obstacle;
 mod tagged;
 

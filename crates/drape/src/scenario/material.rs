@@ -1,0 +1,263 @@
+//! `[material]`: the constitutive law (isotropic or orthotropic, with its
+//! tension field), the section, the density, and the bending rigidity with
+//! the warp direction they share.
+
+use super::check::Checker;
+use super::{MaterialModel, MaterialSpec, ScenarioError, WrinklingSpec};
+use crate::bending::BendingRigidity;
+use crate::element::membrane::Section;
+use crate::material::{Material, Orthotropic, SaintVenantKirchhoff, Wrinkling};
+
+/// `[material]`: the constitutive law, the section and the density (which
+/// may be 0 in a static analysis). With a wrinkling model the prestress is
+/// part of the stress that is projected, so the material carries it, and
+/// the section none.
+pub(super) fn build_material(
+    c: &Checker,
+    m: &MaterialSpec,
+    is_static: bool,
+) -> Result<(Box<dyn Material>, Section, f64), ScenarioError> {
+    let t = "material";
+    let elastic: Elastic = match m.model {
+        MaterialModel::SaintVenantKirchhoff => {
+            c.none_of(
+                t,
+                None,
+                &[
+                    ("warp_modulus", m.warp_modulus.is_some()),
+                    ("weft_modulus", m.weft_modulus.is_some()),
+                    ("shear_modulus", m.shear_modulus.is_some()),
+                ],
+                "to model = \"saint-venant-kirchhoff\" (an isotropic material has youngs_modulus; set model = \"orthotropic\" for a woven fabric)",
+            )?;
+            let why = "with model = \"saint-venant-kirchhoff\" (Pa)";
+            let young = c.required(t, None, "youngs_modulus", &m.youngs_modulus, why)?;
+            let young = c.positive(t, None, "youngs_modulus", young)?;
+            if !(m.poisson_ratio.is_finite() && m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5) {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    "poisson_ratio",
+                    format!("must lie in (-1, 0.5), not {}", m.poisson_ratio),
+                ));
+            }
+            Elastic::Isotropic(young)
+        }
+        MaterialModel::Orthotropic => {
+            c.absent(
+                t,
+                None,
+                "youngs_modulus",
+                &m.youngs_modulus,
+                "to model = \"orthotropic\" (give warp_modulus, weft_modulus and shear_modulus)",
+            )?;
+            let modulus = |key: &str, v: &Option<f64>| {
+                let v = c.required(t, None, key, v, "with model = \"orthotropic\" (Pa)")?;
+                c.positive(t, None, key, v)
+            };
+            let e1 = modulus("warp_modulus", &m.warp_modulus)?;
+            let e2 = modulus("weft_modulus", &m.weft_modulus)?;
+            let g12 = modulus("shear_modulus", &m.shear_modulus)?;
+            let nu = m.poisson_ratio;
+            if !(nu.is_finite() && nu * nu < e1 / e2) {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    "poisson_ratio",
+                    format!(
+                        "must satisfy nu12^2 < warp_modulus / weft_modulus = {} (nu12 nu21 < 1, a positive definite material), not {nu}",
+                        e1 / e2
+                    ),
+                ));
+            }
+            let material = Orthotropic::new(e1, e2, g12, nu, warp_direction(c, m)?)
+                .map_err(|e| c.invalid(t, None, "model", e.to_string()))?;
+            Elastic::Orthotropic(Box::new(material))
+        }
+    };
+    let thickness = c.positive(t, None, "thickness", m.thickness)?;
+    let density = if is_static && m.density == 0.0 {
+        0.0
+    } else {
+        c.positive(t, None, "density", m.density)?
+    };
+    c.finite(t, None, "prestress", &[m.prestress])?;
+    if m.wrinkling == WrinklingSpec::RelaxedEnergy && m.prestress != 0.0 {
+        return Err(c.invalid(
+            t,
+            None,
+            "prestress",
+            format!(
+                "must be 0 with wrinkling = \"relaxed-energy\" (Pipkin's relaxed energy has no prestress), not {}",
+                m.prestress
+            ),
+        ));
+    }
+    let slack = if is_static { 1e-6 } else { 0.0 };
+    let (material, prestress): (Box<dyn Material>, f64) = match (elastic, m.wrinkling.model()) {
+        (Elastic::Isotropic(young), None) => (
+            Box::new(SaintVenantKirchhoff::new(young, m.poisson_ratio)),
+            m.prestress,
+        ),
+        (Elastic::Isotropic(young), Some(model)) => {
+            let w = Wrinkling::new(young, m.poisson_ratio, m.prestress, model);
+            let w = if is_static {
+                w.with_slack_tangent(slack)
+            } else {
+                w
+            };
+            (Box::new(w), 0.0)
+        }
+        (Elastic::Orthotropic(o), None) => (o, m.prestress),
+        (Elastic::Orthotropic(o), Some(model)) => (
+            Box::new(
+                o.with_wrinkling(model, m.prestress)
+                    .with_slack_tangent(slack),
+            ),
+            0.0,
+        ),
+    };
+    let section = Section {
+        thickness,
+        prestress,
+    };
+    Ok((material, section, density))
+}
+
+/// The elastic law of `[material] model`, before wrinkling.
+enum Elastic {
+    /// Saint-Venant–Kirchhoff with this Young's modulus (Pa).
+    Isotropic(f64),
+    /// The orthotropic material.
+    Orthotropic(Box<Orthotropic>),
+}
+
+/// `[material] warp_direction`, default `[1, 0, 0]`: finite and not zero.
+fn warp_direction(c: &Checker, m: &MaterialSpec) -> Result<[f64; 3], ScenarioError> {
+    let t = "material";
+    match m.warp_direction {
+        None => Ok([1.0, 0.0, 0.0]),
+        Some(d) => {
+            c.finite(t, None, "warp_direction", &d)?;
+            if d == [0.0; 3] {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    "warp_direction",
+                    "must not be the zero vector".into(),
+                ));
+            }
+            Ok(d)
+        }
+    }
+}
+
+/// `[material] bending_rigidity` and `warp_direction` (SPEC §6.2): `None`
+/// for no bending (the default, or a rigidity of 0).
+pub(super) fn build_bending(
+    c: &Checker,
+    m: &MaterialSpec,
+) -> Result<Option<BendingRigidity>, ScenarioError> {
+    let t = "material";
+    let key = "bending_rigidity";
+    // A rigidity (N m): a finite number >= 0, or `None` (with what to say).
+    let number = |v: &toml::Value| -> Result<f64, String> {
+        let b = match v {
+            toml::Value::Float(f) => *f,
+            toml::Value::Integer(i) => *i as f64,
+            other => return Err(format!("must be a number (N m), not {other}")),
+        };
+        if b.is_finite() && b >= 0.0 {
+            Ok(b)
+        } else {
+            Err(format!("must be a finite number >= 0 (N m), not {b}"))
+        }
+    };
+    let direction = warp_direction(c, m)?;
+    let value = match &m.bending_rigidity {
+        None => None,
+        Some(toml::Value::String(s)) if s == "plate" => {
+            let Some(young) = m
+                .youngs_modulus
+                .filter(|_| m.model == MaterialModel::SaintVenantKirchhoff)
+            else {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    key,
+                    "= \"plate\" is E t^3 / (12 (1 - nu^2)) of an isotropic material; with model = \"orthotropic\" give { warp, weft } (N m)".into(),
+                ));
+            };
+            let d = young * m.thickness.powi(3) / (12.0 * (1.0 - m.poisson_ratio.powi(2)));
+            Some(BendingRigidity::Plate {
+                rigidity: d,
+                poisson_ratio: m.poisson_ratio,
+            })
+        }
+        Some(toml::Value::String(s)) => {
+            return Err(c.invalid(
+                t,
+                None,
+                key,
+                format!(
+                    "must be a number (N m), a table {{ warp, weft }} or \"plate\", not \"{s}\""
+                ),
+            ));
+        }
+        Some(toml::Value::Table(table)) => {
+            if let Some(k) = table
+                .keys()
+                .find(|k| !matches!(k.as_str(), "warp" | "weft"))
+            {
+                return Err(c.invalid_in(
+                    t,
+                    key,
+                    k,
+                    "is not a key of bending_rigidity (expected warp and weft, N m)".into(),
+                ));
+            }
+            let get = |name: &str| match table.get(name) {
+                Some(v) => number(v).map_err(|why| c.invalid_in(t, key, name, why)),
+                None => Err(c.invalid_in(
+                    t,
+                    key,
+                    name,
+                    "is required in a woven fabric's { warp, weft } bending rigidity".into(),
+                )),
+            };
+            let (warp, weft) = (get("warp")?, get("weft")?);
+            (warp > 0.0 || weft > 0.0).then_some(BendingRigidity::Woven {
+                warp,
+                weft,
+                direction,
+            })
+        }
+        Some(v) => {
+            let b = number(v).map_err(|_| {
+                c.invalid(
+                    t,
+                    None,
+                    key,
+                    format!(
+                        "must be a finite number >= 0 (N m), a table {{ warp, weft }} or \"plate\", not {v}"
+                    ),
+                )
+            })?;
+            (b > 0.0).then_some(BendingRigidity::Isotropic(b))
+        }
+    };
+    // Judged on what was written: a woven `{ warp = 0, weft = 0 }` is no
+    // bending, but its warp direction is still in place.
+    if m.warp_direction.is_some()
+        && m.model != MaterialModel::Orthotropic
+        && !matches!(m.bending_rigidity, Some(toml::Value::Table(_)))
+    {
+        return Err(c.invalid(
+            t,
+            None,
+            "warp_direction",
+            "applies only to model = \"orthotropic\" and to a woven fabric's bending_rigidity = { warp, weft }".into(),
+        ));
+    }
+    Ok(value)
+}
