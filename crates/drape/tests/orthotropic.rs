@@ -702,3 +702,165 @@ fn bad_orthotropic_input_names_the_key_line_and_value() {
     .unwrap();
     assert!(setup.model.bending.is_some());
 }
+
+/// In-plane shear of a woven square into a tension field: the boundary of
+/// a 10 cm square held on a simple shear `x += gamma y` (gamma = 0.05), the
+/// warp at 30 degrees to x. Every element is wrinkled, its stress uniaxial,
+/// of the magnitude and along the direction that an independent
+/// brute-force maximisation of the uniaxial energy `(n.E.n)^2 E(n)` gives
+/// for the homogeneous strain (200,000 directions, then golden section) —
+/// for both tension-field models — and that direction is 10 degrees and
+/// more away from the principal strain direction an isotropic model would
+/// take.
+#[test]
+fn in_plane_shear_wrinkles_along_the_anisotropic_tension_field() {
+    use std::f64::consts::PI;
+    let (gamma, phi) = (0.05f64, PI / 6.0);
+    let warp = [phi.cos(), phi.sin(), 0.0];
+    // The homogeneous Green-Lagrange strain, in x-y and in the warp's axes.
+    let eg = [0.0, 0.5 * gamma * gamma, gamma];
+    let (c, s) = (phi.cos(), phi.sin());
+    let em = [
+        eg[0] * c * c + eg[1] * s * s + eg[2] * c * s,
+        eg[0] * s * s + eg[1] * c * c - eg[2] * c * s,
+        2.0 * (eg[1] - eg[0]) * c * s + eg[2] * (c * c - s * s),
+    ];
+    let compliance = |t: [f64; 3]| {
+        t[0] * t[0] / E1 + t[1] * t[1] / E2 - 2.0 * NU12 / E1 * t[0] * t[1] + t[2] * t[2] / G12
+    };
+    let t_of = |b: f64| [b.cos().powi(2), b.sin().powi(2), b.cos() * b.sin()];
+    let g = |b: f64| {
+        let t = t_of(b);
+        let p = (t[0] * em[0] + t[1] * em[1] + t[2] * em[2]).max(0.0);
+        p * p / compliance(t)
+    };
+    let n = 200_000;
+    let best = (0..n)
+        .map(|i| PI * i as f64 / n as f64)
+        .fold(
+            (0.0, 0.0),
+            |acc, b| if g(b) > acc.1 { (b, g(b)) } else { acc },
+        );
+    let (mut lo, mut hi) = (best.0 - PI / n as f64, best.0 + PI / n as f64);
+    let golden = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..100 {
+        let (x1, x2) = (hi - golden * (hi - lo), lo + golden * (hi - lo));
+        if g(x1) < g(x2) {
+            lo = x1;
+        } else {
+            hi = x2;
+        }
+    }
+    let beta = 0.5 * (lo + hi);
+    let t = t_of(beta);
+    let relaxed = (t[0] * em[0] + t[1] * em[1] + t[2] * em[2]) / compliance(t);
+    let d = 1.0 - NU12 * NU12 * E2 / E1;
+    let s_el = [
+        (E1 * em[0] + NU12 * E2 * em[1]) / d,
+        (NU12 * E2 * em[0] + E2 * em[1]) / d,
+        G12 * em[2],
+    ];
+    let projected = t[0] * s_el[0] + t[1] * s_el[1] + 2.0 * t[2] * s_el[2];
+    // The isotropic answer: the major principal strain direction.
+    let principal = 0.5 * eg[2].atan2(eg[0] - eg[1]);
+    let apart =
+        ((phi + beta - principal).rem_euclid(PI)).min(PI - (phi + beta - principal).rem_euclid(PI));
+    eprintln!(
+        "wrinkles at {:.3} deg (isotropic: {:.3} deg); relaxed {relaxed:.3} Pa, projected {projected:.3} Pa",
+        (phi + beta).to_degrees(),
+        principal.to_degrees()
+    );
+    assert!(
+        apart > 10f64.to_radians(),
+        "{} deg apart",
+        apart.to_degrees()
+    );
+    for (model, expected) in [
+        ("relaxed-energy", relaxed),
+        ("stress-projection", projected),
+    ] {
+        let text = format!(
+            r#"
+[mesh]
+shape = "rectangle"
+size = [0.1, 0.1]
+divisions = [6, 6]
+pattern = "alternate"
+center = [0.05, 0.05, 0.0]
+[material]
+model = "orthotropic"
+warp_modulus = {E1}
+weft_modulus = {E2}
+shear_modulus = {G12}
+poisson_ratio = {NU12}
+warp_direction = {warp:?}
+density = 320.0
+thickness = 0.6e-3
+wrinkling = "{model}"
+[[fix]]
+boundary = true
+[analysis]
+kind = "static"
+steps = 1
+[output]
+every = 1
+"#
+        );
+        let mut s = setup(&text);
+        let x0 = s.model.initial_positions();
+        let sheared: Vec<f64> = x0
+            .chunks(3)
+            .flat_map(|x| [x[0] + gamma * x[1], x[1], x[2]])
+            .collect();
+        let mut start = sheared.clone();
+        for (i, v) in start.iter_mut().enumerate() {
+            if !s.model.fixed[i] {
+                *v += 1e-3 * ((i * 7) as f64).sin();
+            }
+        }
+        let mut ws = drape::integrator::newmark::DynamicWorkspace::new(&s.model).unwrap();
+        let mut state = drape::integrator::State::at_rest(&s.model, start);
+        s.newton.max_iterations = 50;
+        drape::integrator::StaticStepper
+            .step(
+                &s.model,
+                &mut state,
+                1.0,
+                &s.newton,
+                drape::simulation::reference_length(&x0),
+                &mut ws,
+            )
+            .unwrap();
+        let off = state
+            .positions
+            .iter()
+            .zip(&sheared)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            off < 1e-9,
+            "{model}: interior off the homogeneous shear by {off:e} m"
+        );
+        let results = s.model.element_results(&state.positions);
+        for (el, (p, st)) in results.principal.iter().zip(&results.stress).enumerate() {
+            assert_eq!(results.state[el], 1, "{model}: element {el} not wrinkled");
+            assert!(
+                p[1].abs() < 1e-9 * expected,
+                "{model}: minor principal stress {}",
+                p[1]
+            );
+            assert!(
+                (p[0] / expected - 1.0).abs() < 1e-8,
+                "{model}: {} vs {expected}",
+                p[0]
+            );
+            // The tension's direction in the warp's frame, against beta.
+            let angle = 0.5 * (2.0 * st[2]).atan2(st[0] - st[1]);
+            let diff = (angle - beta).rem_euclid(PI);
+            assert!(
+                diff.min(PI - diff) < 1e-7,
+                "{model}: element {el} at {angle} vs {beta}"
+            );
+        }
+    }
+}
