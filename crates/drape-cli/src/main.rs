@@ -346,18 +346,33 @@ fn run(
     quiet: bool,
     verbose: bool,
 ) -> Result<(), Failure> {
-    let path = match (&scenario, &resume) {
-        (Some(p), _) => p.clone(),
-        (None, Some(dir)) => started_with(dir)?,
+    // A resume holds its directory before it reads anything, so that a
+    // refusal can be recorded in the summary without racing another writer.
+    let resumed = match &resume {
+        Some(dir) => Some(resume_lock(dir)?),
+        None => None,
+    };
+    let (path, setup) = match (&scenario, &resume) {
+        (Some(p), None) => (p.clone(), load(p)?),
+        (_, Some(dir)) => {
+            let loaded = scenario
+                .clone()
+                .map_or_else(|| started_with(dir), Ok)
+                .and_then(|p| {
+                    // A changed or missing input file is named as such, before
+                    // the scenario reads it.
+                    simulation::check_resume_inputs(dir).map_err(|e| Failure::Input(e.into()))?;
+                    let setup = load(&p)?;
+                    Ok((p, setup))
+                });
+            match loaded {
+                Ok(loaded) => loaded,
+                Err(failure) => return Err(record_refusal(dir, failure)),
+            }
+        }
         (None, None) => unreachable!("clap requires one of them"),
     };
     let path = path.as_path();
-    if let Some(dir) = &resume {
-        // A changed or missing input file is named as such, before the
-        // scenario reads it.
-        simulation::check_resume_inputs(dir).map_err(|e| Failure::Input(e.into()))?;
-    }
-    let setup = load(path)?;
     let out = resume.clone().or(out).unwrap_or_else(|| {
         let stem = path
             .file_stem()
@@ -367,7 +382,10 @@ fn run(
     });
     // One writer per directory, held to the end of the run; a fresh run
     // starts from a directory of drape's own with its old outputs gone.
-    let lock = directory::lock(&out).map_err(|e| Failure::Input(e.into()))?;
+    let lock = match resumed {
+        Some(lock) => lock,
+        None => directory::lock(&out).map_err(|e| Failure::Input(e.into()))?,
+    };
     if resume.is_none() {
         directory::clear_previous_outputs(&lock, &out, Some(path))
             .map_err(|e| Failure::Input(e.into()))?;
@@ -388,7 +406,17 @@ fn run(
                 std::fs::write(out.join("scenario.path"), abs.to_string_lossy().as_bytes())
             })
             .with_context(|| format!("cannot write into {}", out.display()))
-            .map_err(Failure::Run)?;
+            .map_err(|e| {
+                // The directory is drape's: its summary says why.
+                let message = format!("{e:#}");
+                match simulation::record_failure(&out, Some(&setup), false, &message) {
+                    Ok(()) => Failure::Run(e),
+                    Err(s) => Failure::Run(e.context(format!(
+                        "and {} could not be written: {s}",
+                        out.join("summary.json").display()
+                    ))),
+                }
+            })?;
     }
     static STOP: AtomicBool = AtomicBool::new(false);
     // A second Ctrl-C while the step finishes does nothing more; the
@@ -499,11 +527,58 @@ fn run(
             }
             Ok(())
         }
-        Err(e @ RunError::Interrupted { .. }) => Err(Failure::Interrupted(anyhow::Error::new(e))),
-        Err(e @ RunError::Resume(_)) => Err(Failure::Input(anyhow::Error::new(e))),
-        Err(e @ RunError::Io { .. }) => Err(Failure::Run(anyhow::Error::new(e))),
-        Err(e) => Err(Failure::Run(
-            anyhow::Error::new(e).context(format!("run of {} failed", path.display())),
+        Err(e) => Err(match e.cause() {
+            RunError::Interrupted { .. } => Failure::Interrupted(anyhow::Error::new(e)),
+            RunError::Resume(_) => Failure::Input(anyhow::Error::new(e)),
+            RunError::Io { .. } => Failure::Run(anyhow::Error::new(e)),
+            _ => Failure::Run(
+                anyhow::Error::new(e).context(format!("run of {} failed", path.display())),
+            ),
+        }),
+    }
+}
+
+/// The lock of the directory a resume continues in: it must be there and
+/// hold a run's outputs (nothing is created in a directory that does not).
+fn resume_lock(dir: &Path) -> Result<directory::OutputLock, Failure> {
+    if !dir.is_dir() {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "--resume {}: {}; name the output directory of a drape run",
+            dir.display(),
+            if dir.exists() {
+                "not a directory"
+            } else {
+                "no such directory"
+            }
+        )));
+    }
+    if !holds_a_run(dir) {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "--resume {}: it holds no drape run (no checkpoint.bin, summary.json or scenario.path); name the output directory of a run",
+            dir.display()
+        )));
+    }
+    directory::lock(dir).map_err(|e| Failure::Input(e.into()))
+}
+
+/// Whether `dir` holds a run's outputs.
+fn holds_a_run(dir: &Path) -> bool {
+    ["checkpoint.bin", "summary.json", "scenario.path"]
+        .iter()
+        .any(|f| dir.join(f).is_file())
+}
+
+/// A resume refused after its directory was locked: the refusal goes into
+/// the directory's summary (status "failed", its counts kept; a completed
+/// run's summary is left alone), and is returned.
+fn record_refusal(dir: &Path, failure: Failure) -> Failure {
+    let (Failure::Input(e) | Failure::Run(e) | Failure::Interrupted(e)) = &failure;
+    let message = format!("cannot resume: {e:#}");
+    match simulation::record_failure(dir, None, true, &message) {
+        Ok(()) => failure,
+        Err(s) => Failure::Input(anyhow::anyhow!(
+            "{e:#}; and {} could not be written: {s}",
+            dir.join("summary.json").display()
         )),
     }
 }

@@ -1,6 +1,7 @@
 //! Issue 19: `drape run --resume DIR` refuses an input file (here the
 //! mesh) that changed or went missing since the checkpoint, naming it,
-//! with exit 2 — before the scenario reads it.
+//! with exit 2 — before the scenario reads it — and says so in the
+//! directory's summary.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -93,6 +94,15 @@ fn a_changed_or_missing_mesh_file_refuses_the_resume() {
     let out = dir.join("out");
     let o = drape(&[&scenario, Path::new("--out"), &out]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // As if stopped at the checkpoint (a completed run's summary is left
+    // alone by a refused resume).
+    let summary_path = out.join("summary.json");
+    let summary = |path: &Path| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+    };
+    let mut s = summary(&summary_path);
+    s["status"] = "interrupted".into();
+    std::fs::write(&summary_path, s.to_string()).unwrap();
     let history = std::fs::read(out.join("history.csv")).unwrap();
     let mesh = dir.join("plate.obj");
     let named = std::fs::canonicalize(&mesh).unwrap().display().to_string();
@@ -111,6 +121,13 @@ fn a_changed_or_missing_mesh_file_refuses_the_resume() {
         assert!(stderr(&o).contains(f), "expected {f:?} in\n{}", stderr(&o));
     }
     assert_eq!(std::fs::read(out.join("history.csv")).unwrap(), history);
+    let s = summary(&summary_path);
+    assert_eq!(s["status"], "failed", "{s}");
+    let message = s["message"].as_str().unwrap();
+    assert!(
+        message.starts_with("cannot resume") && message.contains(&named),
+        "{message}"
+    );
 
     std::fs::remove_file(&mesh).unwrap();
     let o = drape(&[Path::new("--resume"), &out]);
@@ -127,6 +144,7 @@ fn a_changed_or_missing_mesh_file_refuses_the_resume() {
     std::fs::write(&mesh, original).unwrap();
     let o = drape(&[Path::new("--resume"), &out]);
     assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(summary(&summary_path)["status"], "completed");
     assert_eq!(std::fs::read(out.join("history.csv")).unwrap(), history);
     let _ = std::fs::remove_dir_all(&dir);
 }

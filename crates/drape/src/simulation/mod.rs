@@ -205,6 +205,39 @@ pub enum RunError {
     /// The checkpoint, history or collection to resume from is unusable.
     #[error("cannot resume: {0}")]
     Resume(String),
+    /// The run failed, and `summary.json` could not say so either.
+    #[error("{cause}; summary.json could not be written either: {error}")]
+    Unrecorded {
+        /// Why the run failed.
+        cause: Box<RunError>,
+        /// Why the summary could not be written.
+        error: std::io::Error,
+    },
+}
+
+impl RunError {
+    /// `self`, an output error met after the run had already failed with
+    /// `first`, with `first` said in its message.
+    fn after(self, first: &RunError) -> RunError {
+        match self {
+            RunError::Io { path, error } => RunError::Io {
+                path,
+                error: std::io::Error::new(
+                    error.kind(),
+                    format!("{error} (the run had stopped before: {first})"),
+                ),
+            },
+            e => e,
+        }
+    }
+
+    /// The failure itself, past an [`RunError::Unrecorded`] wrapper.
+    pub fn cause(&self) -> &RunError {
+        match self {
+            RunError::Unrecorded { cause, .. } => cause.cause(),
+            e => e,
+        }
+    }
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
@@ -393,6 +426,89 @@ pub fn run_with(
     observer: &mut dyn FnMut(&StepInfo),
     control: RunControl,
 ) -> Result<Summary, RunError> {
+    let mut recorded = false;
+    match run_session(setup, out, observer, control, &mut recorded) {
+        // The loop's own ends (a failed step, an I/O error while stepping,
+        // an interruption) and a set-up that failed wrote their summary.
+        Ok(summary) => Ok(summary),
+        Err(e @ (RunError::Resume(_) | RunError::Io { .. })) if !recorded => {
+            // A refused resume keeps the counts of the session before it
+            // (its history and checkpoint are left as they were); a fresh
+            // run that could not start records its initial state.
+            let previous = control.resume.then_some(());
+            let message = e.to_string();
+            match record_failure(out, Some(setup), previous.is_some(), &message) {
+                Ok(()) => Err(e),
+                Err(error) => Err(RunError::Unrecorded {
+                    cause: Box::new(e),
+                    error,
+                }),
+            }
+        }
+        Err(e) => Err(e),
+    }
+}
+
+/// Records in `out/summary.json` that a run or a resume failed before its
+/// loop could (status `"failed"`, `message`): when `keep_previous` and the
+/// directory holds a summary, that summary keeps its counts (those of the
+/// session its history and checkpoint come from) and only its status and
+/// message change — but a `"completed"` one is left alone: the outputs
+/// beside it are still that run's; otherwise the summary of `setup`'s
+/// initial state (0 steps), or, without a setup, a summary of the status
+/// and the message alone.
+///
+/// # Errors
+/// The summary could not be written.
+pub fn record_failure(
+    out: &Path,
+    setup: Option<&Setup>,
+    keep_previous: bool,
+    message: &str,
+) -> std::io::Result<()> {
+    let path = out.join("summary.json");
+    let previous = keep_previous
+        .then(|| std::fs::read(&path).ok())
+        .flatten()
+        .and_then(|bytes| serde_json::from_slice::<serde_json::Value>(&bytes).ok())
+        .filter(serde_json::Value::is_object);
+    let json = match (previous, setup) {
+        (Some(value), _) if value["status"] == "completed" => return Ok(()),
+        (Some(mut value), _) => {
+            value["status"] = "failed".into();
+            value["message"] = message.into();
+            value
+        }
+        (None, Some(setup)) => {
+            let state = State::at_rest(&setup.model, setup.model.initial_positions());
+            let s = summary(
+                setup,
+                &state,
+                Some(message.to_owned()),
+                0,
+                0,
+                0,
+                Instant::now(),
+                0.0,
+                0.0,
+            );
+            serde_json::to_value(&s).unwrap_or_default()
+        }
+        (None, None) => serde_json::json!({ "status": "failed", "message": message }),
+    };
+    let text = serde_json::to_string_pretty(&json).unwrap_or_default();
+    write_atomic(&path, text.as_bytes())
+}
+
+/// [`run_with`] but for the summary of a failure before the loop;
+/// `recorded` is set once the loop has ended (and written its summary).
+fn run_session(
+    setup: &Setup,
+    out: &Path,
+    observer: &mut dyn FnMut(&StepInfo),
+    control: RunControl,
+    recorded: &mut bool,
+) -> Result<Summary, RunError> {
     let start = Instant::now();
     let model = &setup.model;
     std::fs::create_dir_all(out.join("fields")).map_err(io_err(out))?;
@@ -555,10 +671,14 @@ pub fn run_with(
             rest,
             observer,
         };
+        // An output that cannot be written ends the run as a failed step
+        // does: the summary says why.
         let end = match controller {
-            Some(controller) => run.adaptive(controller)?,
-            None => run.fixed(&schedule)?,
-        };
+            Some(controller) => run.adaptive(controller),
+            None => run.fixed(&schedule),
+        }
+        .unwrap_or_else(End::Failed);
+        *recorded = true;
         run.finish(end)
     })
 }
@@ -830,17 +950,30 @@ impl Stepper<'_, '_> {
     fn finish(mut self, end: End) -> Result<Summary, RunError> {
         let setup = self.setup;
         let interrupted = matches!(end, End::Interrupted);
-        let at_rest = matches!(end, End::AtRest);
         let output_start = Instant::now();
-        if self.counters.last_written != self.counters.step && !interrupted {
-            self.frame_writer.submit(Snapshot::of(
-                self.counters.step,
-                &self.state,
-                self.last_contact.as_ref(),
-            ))?;
-        }
-        // Every frame is on disk before the summary says how the run ended.
-        let output_thread_seconds = self.frame_writer.finish()?.as_secs_f64();
+        // After an output error no more is written but the summary: the
+        // last frame would not match the history.
+        let output_failed = matches!(&end, End::Failed(RunError::Io { .. }));
+        let last_frame =
+            if self.counters.last_written != self.counters.step && !interrupted && !output_failed {
+                self.frame_writer.submit(Snapshot::of(
+                    self.counters.step,
+                    &self.state,
+                    self.last_contact.as_ref(),
+                ))
+            } else {
+                Ok(())
+            };
+        // Every frame is on disk before the summary says how the run ended;
+        // a frame that could not be written is the run's failure.
+        let written = last_frame.and_then(|()| self.frame_writer.finish());
+        let (output_thread_seconds, end) = match (written, end) {
+            (Ok(busy), end) => (busy.as_secs_f64(), end),
+            (Err(e), End::Failed(first)) => (0.0, End::Failed(e.after(&first))),
+            (Err(e), _) => (0.0, End::Failed(e)),
+        };
+        let interrupted = matches!(end, End::Interrupted);
+        let at_rest = matches!(end, End::AtRest);
         self.output_seconds += output_start.elapsed().as_secs_f64();
         let (state, counters) = (&self.state, &self.counters);
         let kinetic = setup
@@ -886,7 +1019,21 @@ impl Stepper<'_, '_> {
             summary.message = watch.message(state.time, counters.step);
             summary.at_rest = Some(true);
         }
-        write_summary(self.out, &summary)?;
+        if let Err(e) = write_summary(self.out, &summary) {
+            let RunError::Io { error, .. } = e else {
+                return Err(e);
+            };
+            return Err(match failure {
+                Some(cause) => RunError::Unrecorded {
+                    cause: Box::new(cause),
+                    error,
+                },
+                None => RunError::Io {
+                    path: self.out.join("summary.json"),
+                    error,
+                },
+            });
+        }
         match (failure, interruption) {
             (Some(e), _) => Err(e),
             (None, Some(message)) => Err(RunError::Interrupted { message }),
