@@ -3,9 +3,13 @@
 #
 #   scripts/test.sh
 #
-# 1. the Rust tests, `cargo test --release` (every test of the default
-#    members; the `drape` binary it builds is the one the Python tests
-#    compare with);
+# 1. the Rust tests, `cargo test --release --workspace --exclude
+#    drape-bench`: the tests of the default members (drape-py has none in
+#    Rust, drape-bench only criterion's benchmarks), with drape-py among
+#    the packages so that cargo gives the dependencies the features
+#    maturin's build of drape-py gives them — that build then reuses the
+#    compiled faer and drape (drape-py's Cargo.toml, `libc`). The `drape`
+#    binary it builds is the one the Python tests compare with;
 # 2. the Python package: `pip install ./crates/drape-py` into a virtual
 #    environment, then its tests, `pytest crates/drape-py/tests`.
 #
@@ -22,8 +26,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-echo "== Rust: cargo test --release"
-cargo test --release
+start=$SECONDS
+echo "== Rust: cargo test --release --workspace --exclude drape-bench"
+cargo test --release --workspace --exclude drape-bench
+echo "== Rust tests done in $((SECONDS - start)) s"
 
 target=$(cargo metadata --format-version 1 --no-deps |
   python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
@@ -44,6 +50,7 @@ echo "== Python: pip install ./crates/drape-py (into $venv)"
 # --no-build-isolation: the environment's maturin builds it (no download).
 "$python" -m pip install --quiet --disable-pip-version-check --no-build-isolation ./crates/drape-py
 
+echo "== Python: package built and installed at $((SECONDS - start)) s"
 echo "== Python: pytest crates/drape-py/tests"
 # The tests compare drape.run with the binary step 1 built. No cache
 # directory: it would be left in the work tree.

@@ -97,8 +97,10 @@ impl RunResult {
     fn history(&self, py: Python<'_>) -> PyResult<Py<PyDict>> {
         self.history
             .get_or_try_init(py, || {
-                let history =
-                    History::read(&self.out).map_err(|e| render_error(py, e, &self.out))?;
+                let out = &self.out;
+                let history = py
+                    .detach(|| History::read(out))
+                    .map_err(|e| render_error(py, e, out))?;
                 let dict = PyDict::new(py);
                 for (name, column) in history.names.into_iter().zip(history.columns) {
                     dict.set_item(name, PyArray1::from_vec(py, column))?;

@@ -49,6 +49,8 @@ const SIGNAL_INTERVAL: Duration = Duration::from_millis(50);
 ///     OutputError: ``out`` is in use by another run or holds other files.
 ///     KeyboardInterrupt: Ctrl-C; the run finished its step and wrote a
 ///         checkpoint and its summary (status ``"interrupted"``) first.
+///         (Python handles signals on its main thread: a run on another
+///         thread goes on.)
 #[pyfunction]
 #[pyo3(signature = (scenario, out = None, *, resume = false))]
 pub fn run(
