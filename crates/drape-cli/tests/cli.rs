@@ -1809,6 +1809,59 @@ const BAD_INPUTS: &[BadInput] = &[
         fragments: &["`mesh.divisions`", "[4000, 4000]", "16008001 nodes"],
         line: Some(7),
     },
+    // Issue 19: values that overflowed later now name their key.
+    BadInput {
+        file: "huge_youngs.toml",
+        fragments: &["`material.youngs_modulus`", "1e308 Pa is above 1e15 Pa"],
+        line: Some(11),
+    },
+    BadInput {
+        file: "huge_size.toml",
+        fragments: &["`mesh.size`", "[1e200, 1e200]", "beyond 1e6 m"],
+        line: Some(6),
+    },
+    BadInput {
+        file: "far_center.toml",
+        fragments: &["`mesh.center`", "[1e17, 0.0, 0.0]", "beyond 1e6 m"],
+        line: Some(9),
+    },
+    BadInput {
+        file: "far_node_obj.toml",
+        fragments: &[
+            "`mesh.path`",
+            "far_node.obj",
+            "node 1",
+            "1e300",
+            "beyond 1e6 m",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "mesh_array.toml",
+        fragments: &[
+            "`mesh`",
+            "found an array of tables [[mesh]]",
+            "write [mesh]",
+        ],
+        line: Some(4),
+    },
+    BadInput {
+        file: "datetime_title.toml",
+        fragments: &[
+            "`title`",
+            "the date-time 1979-05-27T07:32:00Z, expected a string",
+        ],
+        line: Some(3),
+    },
+    BadInput {
+        file: "schedule_overflow.toml",
+        fragments: &[
+            "`time.segments`",
+            "end time cannot be represented",
+            "449 steps",
+        ],
+        line: Some(16),
+    },
 ];
 
 /// Files of tests/bad_inputs whose case is commented out `// TODO(lead):`

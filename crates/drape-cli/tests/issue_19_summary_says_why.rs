@@ -5,64 +5,29 @@
 //! resume that is refused never creates or takes over a directory that is
 //! not a run's.
 
+mod issue_19_support;
+
+use issue_19_support::{DRAPE, drape as drape_args, falling_plate, scratch, text};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-const DRAPE: &str = env!("CARGO_BIN_EXE_drape");
-
-/// A fresh scratch directory for `name`.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("drape-issue19-why-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch directory");
-    dir
-}
-
-/// A 4 x 4 plate falling for `steps` steps, a frame every step and a
-/// checkpoint every 5.
+/// The plate of [`falling_plate`], a frame every step and a checkpoint
+/// every 5.
 fn scenario(dir: &Path, steps: usize) -> PathBuf {
-    let path = dir.join("fall.toml");
-    std::fs::write(
-        &path,
-        format!(
-            r#"
-[mesh]
-shape = "rectangle"
-size = [0.1, 0.1]
-divisions = [4, 4]
-[material]
-youngs_modulus = 2.0e6
-poisson_ratio = 0.3
-density = 320.0
-thickness = 0.6e-3
-[[load]]
-kind = "gravity"
-acceleration = [0.0, 0.0, -9.8]
-[time]
-segments = [{{ steps = {steps}, dt = 1e-3 }}]
-[output]
-every = 1
-checkpoint_every = 5
-"#
-        ),
-    )
-    .unwrap();
-    path
+    falling_plate(dir, steps, "[output]\nevery = 1\ncheckpoint_every = 5")
 }
 
+/// `drape ARGS --quiet`.
 fn drape(args: &[&std::ffi::OsStr]) -> Output {
-    Command::new(DRAPE)
-        .args(args)
-        .arg("--quiet")
-        .stdin(Stdio::null())
-        .output()
-        .expect("spawn drape")
+    let mut all = args.to_vec();
+    all.push("--quiet".as_ref());
+    drape_args(&all)
 }
 
 fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
+    text(&o.stderr)
 }
 
 /// Makes the summary of a completed run in `out` say "interrupted", as
@@ -94,7 +59,7 @@ fn history_rows(out: &Path) -> usize {
 /// fails for everybody.)
 #[test]
 fn a_frame_that_cannot_be_written_is_in_the_summary() {
-    let dir = scratch("frame");
+    let dir = scratch("why-frame");
     let scenario = scenario(&dir, 1_000_000);
     let out = dir.join("out");
     let child = Command::new(DRAPE)
@@ -144,7 +109,7 @@ fn a_frame_that_cannot_be_written_is_in_the_summary() {
 /// summary says "completed".
 #[test]
 fn a_refused_resume_is_in_the_summary_and_a_good_one_replaces_it() {
-    let dir = scratch("scenario");
+    let dir = scratch("why-scenario");
     let scenario = scenario(&dir, 12);
     let out = dir.join("out");
     // Stop the run at its checkpoint: a run of 10 steps is the first 10
@@ -188,7 +153,7 @@ fn a_refused_resume_is_in_the_summary_and_a_good_one_replaces_it() {
 /// is refused (exit 2) and leaves nothing behind.
 #[test]
 fn a_resume_of_no_run_writes_nothing() {
-    let dir = scratch("none");
+    let dir = scratch("why-none");
     let missing = dir.join("missing");
     let o = drape(&["run".as_ref(), "--resume".as_ref(), missing.as_os_str()]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));

@@ -68,9 +68,11 @@ pub use field::{Field, FieldValues, WRINKLE_STATES, format_value};
 pub use image::RgbImage;
 pub use outdir::{FrameEntry, FrameSelect, History, OutputDir};
 pub use overlay::Circle;
+pub use plot::HISTORY_COLUMNS;
 pub use plot::{ExtraPanel, PlotReport, plot, plot_image, plot_image_with, plot_with};
 pub use raster::View;
 pub use render::{
-    Layout, Projection, RenderOptions, RenderReport, default_output, render, render_image,
+    Layout, MAX_RENDER_BYTES, Projection, RenderOptions, RenderReport, default_output, render,
+    render_bytes, render_image,
 };
-pub use scenario::{Obstacle, Shape, parse_obstacles, read_obstacles};
+pub use scenario::{Obstacle, Shape, monitor_names, parse_obstacles, read_obstacles};

@@ -99,6 +99,13 @@ impl OutputDir {
                         "--time {t}: not a finite time"
                     )));
                 }
+                if t < 0.0 {
+                    let (first, last) =
+                        (self.frames[0].time, self.frames[self.frames.len() - 1].time);
+                    return Err(RenderError::InvalidOption(format!(
+                        "--time {t}: a run's time is not negative; its frames span t = {first} to {last} s"
+                    )));
+                }
                 let mut best = 0;
                 for (i, f) in self.frames.iter().enumerate() {
                     if (f.time - t).abs() < (self.frames[best].time - t).abs() {

@@ -108,6 +108,52 @@ pub fn plot_with(
     Ok(report)
 }
 
+/// The columns every history drape writes has, whatever the scenario.
+pub const HISTORY_COLUMNS: [&str; 9] = [
+    "step",
+    "time",
+    "dt",
+    "iterations",
+    "kinetic_energy",
+    "strain_energy",
+    "active_contacts",
+    "contact_force",
+    "min_gap",
+];
+
+/// Refuses a history the plot cannot interpret: one without a column of
+/// [`HISTORY_COLUMNS`], or without the columns of a monitor that
+/// `dir/scenario.toml` names (its panel would say there is none).
+fn check_columns(dir: &Path, hist: &History) -> Result<()> {
+    let mut missing: Vec<String> = HISTORY_COLUMNS
+        .iter()
+        .filter(|c| hist.column(c).is_none())
+        .map(|c| (*c).to_owned())
+        .collect();
+    let monitors = std::fs::read_to_string(dir.join("scenario.toml"))
+        .map(|text| crate::scenario::monitor_names(&text))
+        .unwrap_or_default();
+    for name in monitors {
+        for c in ["x", "y", "z"] {
+            let column = format!("{name}_{c}");
+            if hist.column(&column).is_none() {
+                missing.push(column);
+            }
+        }
+    }
+    if missing.is_empty() {
+        return Ok(());
+    }
+    Err(RenderError::format(
+        dir.join("history.csv"),
+        format!(
+            "lacks the column(s) {} (a drape history has {}, and a monitor's <name>_x, _y, _z for each [[monitor]] of scenario.toml): nothing to plot it by",
+            missing.join(", "),
+            HISTORY_COLUMNS.join(", ")
+        ),
+    ))
+}
+
 /// As [`plot`], into memory.
 ///
 /// # Errors
@@ -147,6 +193,7 @@ pub fn plot_image_with(
     }
     let hist = History::read(dir)?;
     let path = dir.join("history.csv");
+    check_columns(dir, &hist)?;
     let time = hist
         .column("time")
         .ok_or_else(|| RenderError::format(&path, "no time column"))?

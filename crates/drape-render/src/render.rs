@@ -244,6 +244,20 @@ pub fn render_image(dir: &Path, opts: &RenderOptions) -> Result<(RgbImage, Rende
     }
 }
 
+/// The most memory a render's pixel buffers may take (bytes): the
+/// supersampled colour and depth buffers (8 bytes a sample) and the image
+/// (3 bytes a pixel). An image that would need more is refused before
+/// anything is allocated, with the estimate, rather than aborting when the
+/// allocation fails.
+pub const MAX_RENDER_BYTES: u64 = 2 << 30;
+
+/// The pixel buffers' bytes of a `width` x `height` image supersampled
+/// `ss` times in each direction (see [`MAX_RENDER_BYTES`]).
+pub fn render_bytes(width: u32, height: u32, ss: u32) -> u64 {
+    let (w, h, ss) = (u64::from(width), u64::from(height), u64::from(ss));
+    w * ss * h * ss * 8 + w * h * 3
+}
+
 fn check_options(opts: &RenderOptions) -> Result<()> {
     let bad = |m: String| Err(RenderError::InvalidOption(m));
     if !(160..=10_000).contains(&opts.width) || !(120..=10_000).contains(&opts.height) {
@@ -254,6 +268,17 @@ fn check_options(opts: &RenderOptions) -> Result<()> {
     }
     if !(1..=4).contains(&opts.supersample) {
         return bad(format!("supersample {}: must be 1–4", opts.supersample));
+    }
+    let bytes = render_bytes(opts.width, opts.height, opts.supersample);
+    if bytes > MAX_RENDER_BYTES {
+        return bad(format!(
+            "image size {}x{}: its pixel buffers ({}x supersampled) would need about {:.1} GiB, above the bound of {} GiB; choose a smaller size",
+            opts.width,
+            opts.height,
+            opts.supersample,
+            bytes as f64 / f64::from(1u32 << 30),
+            MAX_RENDER_BYTES >> 30
+        ));
     }
     if let Layout::Grid { panels } = opts.layout
         && !(1..=24).contains(&panels)
@@ -459,6 +484,18 @@ impl Scene {
         for &i in &indices {
             let entry = out.frames[i].clone();
             let frame = read_vtu(&entry.path)?;
+            // Nothing can be drawn where a point has no position: a blank
+            // image would say the fabric is not there.
+            if let Some((k, p)) =
+                (frame.points.iter().enumerate()).find(|(_, p)| !p.iter().all(|x| x.is_finite()))
+            {
+                return Err(RenderError::Format {
+                    path: entry.path.clone(),
+                    message: format!(
+                        "point {k} (0-based) has no finite position ({p:?}): the frame cannot be drawn"
+                    ),
+                });
+            }
             let values = opts.field.extract(&frame)?;
             // Frames of one run share their mesh: split it once.
             let (tris, cells) = match frames.last() {

@@ -78,6 +78,25 @@ struct Raw {
     velocity: Option<V3>,
 }
 
+#[derive(Debug, Deserialize)]
+struct Monitors {
+    #[serde(default)]
+    monitor: Vec<NamedMonitor>,
+}
+
+#[derive(Debug, Deserialize)]
+struct NamedMonitor {
+    name: Option<String>,
+}
+
+/// The names of the `[[monitor]]` tables of a scenario's text (none when
+/// the text does not parse: the renderer reads scenarios leniently).
+pub fn monitor_names(text: &str) -> Vec<String> {
+    toml::from_str::<Monitors>(text)
+        .map(|m| m.monitor.into_iter().filter_map(|m| m.name).collect())
+        .unwrap_or_default()
+}
+
 /// Reads the obstacles of the scenario file at `path`. Mesh obstacles are
 /// not drawn: each gives a notice in the second vector.
 ///

@@ -22,6 +22,15 @@ use std::path::{Path, PathBuf};
 /// T3 elements, is ~5 GB).
 const MAX_GENERATED_NODES: usize = 3_000_000;
 
+/// The largest coordinate a mesh node may have (m): a fabric is not a
+/// continent, and beyond it the mesh's areas, masses and forces lose their
+/// digits (a node at 1e17 m cannot tell 0.025 m apart) or overflow.
+pub const MAX_COORDINATE: f64 = 1.0e6;
+
+/// The largest elastic modulus (Pa): a thousand times diamond's. Beyond
+/// it the membrane's forces and the Newton residual's norm overflow.
+pub const MAX_MODULUS: f64 = 1.0e15;
+
 /// A node whose position is recorded in the history.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Monitor {
@@ -162,6 +171,7 @@ impl Scenario {
         let mut inputs = Vec::new();
         let mesh = build_mesh(&c, &self.mesh, &base, &mut inputs)?;
         let (material, section, density) = build_material(&c, &self.material, is_static)?;
+        check_moduli(&c, &self.material)?;
         let bending = build_bending(&c, &self.material)?;
         let loads = (self.loads.iter().enumerate())
             .map(|(i, l)| build_load(&c, &mesh, i, l))
@@ -366,6 +376,24 @@ fn build_segments(c: &Checker, specs: &[SegmentSpec]) -> Result<Vec<(usize, f64)
         }
         segments.push((s.steps, s.dt));
     }
+    // The schedule's totals must exist: the step count in an integer, the
+    // end time in a finite number (1e308 s steps add up to infinity).
+    let steps = segments
+        .iter()
+        .try_fold(0usize, |n, (steps, _)| n.checked_add(*steps));
+    let end: f64 = segments.iter().map(|(n, dt)| *n as f64 * dt).sum();
+    if steps.is_none() || !end.is_finite() {
+        return Err(c.invalid(
+            "time",
+            None,
+            "segments",
+            format!(
+                "the schedule's {} cannot be represented: the segments add up to {} steps to t = {end:e} s; shorten the steps or their number",
+                if steps.is_none() { "step count" } else { "end time" },
+                segments.iter().map(|(n, _)| *n as f64).sum::<f64>()
+            ),
+        ));
+    }
     Ok(segments)
 }
 
@@ -563,11 +591,80 @@ fn build_mesh(
         MeshShape::Disc => disc_mesh(c, spec, order, center)?,
         MeshShape::File => file_mesh(c, spec, order, base, inputs)?,
     };
+    check_extent(c, spec, &mesh)?;
     mesh.validate().map_err(|e| ScenarioError::Mesh {
         file: c.file.to_path_buf(),
         message: e.to_string(),
     })?;
     Ok(mesh)
+}
+
+/// Every node within [`MAX_COORDINATE`] of the origin, else an error of
+/// the key that put it there: `mesh.center` (when it is that far itself),
+/// `mesh.size` or `mesh.radius`, or the file's node and coordinate.
+fn check_extent(c: &Checker, spec: &MeshSpec, mesh: &Mesh) -> Result<(), ScenarioError> {
+    let far = |x: &f64| x.abs() > MAX_COORDINATE;
+    let Some((node, x)) = mesh
+        .nodes
+        .iter()
+        .enumerate()
+        .find(|(_, x)| x.iter().any(far))
+    else {
+        return Ok(());
+    };
+    let bound = format!("{MAX_COORDINATE:e} m, the largest coordinate a mesh may have");
+    let center = spec.center.unwrap_or([0.0; 3]);
+    let (key, message) = match spec.shape {
+        _ if center.iter().any(far) => (
+            "center",
+            format!("{center:?} lies beyond {bound}; move the problem near the origin"),
+        ),
+        MeshShape::Rectangle => (
+            "size",
+            format!(
+                "{:?} puts nodes beyond {bound} (node {node} at {x:?})",
+                spec.size.unwrap_or_default()
+            ),
+        ),
+        MeshShape::Disc => (
+            "radius",
+            format!(
+                "{:e} puts nodes beyond {bound} (node {node} at {x:?})",
+                spec.radius.unwrap_or_default()
+            ),
+        ),
+        MeshShape::File => (
+            "path",
+            format!(
+                "{}: node {node} (0-based, in the order read) at {x:?} lies beyond {bound}; is the file in metres?",
+                spec.path.as_deref().unwrap_or(Path::new("")).display(),
+            ),
+        ),
+    };
+    Err(c.invalid("mesh", None, key, message))
+}
+
+/// `[material]` moduli at most [`MAX_MODULUS`] (their positivity is
+/// checked where the material is built).
+fn check_moduli(c: &Checker, m: &super::MaterialSpec) -> Result<(), ScenarioError> {
+    for (key, value) in [
+        ("youngs_modulus", m.youngs_modulus),
+        ("warp_modulus", m.warp_modulus),
+        ("weft_modulus", m.weft_modulus),
+        ("shear_modulus", m.shear_modulus),
+    ] {
+        if let Some(v) = value.filter(|v| *v > MAX_MODULUS) {
+            return Err(c.invalid(
+                "material",
+                None,
+                key,
+                format!(
+                    "{v:e} Pa is above {MAX_MODULUS:e} Pa (a thousand times diamond's modulus), beyond which the membrane's forces overflow; is it in Pa?"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// `[mesh] shape = "rectangle"`: `size` and `divisions`, at most

@@ -126,18 +126,20 @@ pub struct Scenario {
 pub struct MeshSpec {
     /// `"rectangle"`, `"disc"` or `"file"`. Required.
     pub shape: MeshShape,
-    /// Rectangle: width (x) and height (y), m, > 0.
+    /// Rectangle: width (x) and height (y), m, > 0; every node within
+    /// 1e6 m of the origin.
     pub size: Option<[f64; 2]>,
     /// Rectangle: squares along x and y (each cut in two triangles), >= 1.
     pub divisions: Option<[usize; 2]>,
     /// Rectangle: diagonal pattern `"right"` (default), `"left"`, `"alternate"`.
     pub pattern: Option<crate::mesh::generate::Pattern>,
-    /// Rectangle and disc: centre; the mesh lies in the plane `z = center[2]`. Default `[0, 0, 0]`.
+    /// Rectangle and disc: centre; the mesh lies in the plane `z = center[2]`. Default `[0, 0, 0]`;
+    /// finite, each coordinate within ±1e6 m.
     pub center: Option<[f64; 3]>,
     /// Lagrange order of the triangles: 1 (default), 2 or 3. For a file, the
     /// file's order is used and this key, if given, must agree.
     pub order: Option<usize>,
-    /// Disc: radius, m, > 0.
+    /// Disc: radius, m, > 0; every node within 1e6 m of the origin.
     pub radius: Option<f64>,
     /// Disc: number of rings, >= 1.
     pub rings: Option<usize>,
@@ -166,18 +168,18 @@ pub struct MaterialSpec {
     /// `"orthotropic"` (a woven fabric, SPEC §6.2).
     #[serde(default)]
     pub model: MaterialModel,
-    /// Young's modulus `E` (Pa), > 0. Required by the isotropic model, not
+    /// Young's modulus `E` (Pa), > 0, <= 1e15. Required by the isotropic model, not
     /// allowed with the orthotropic one.
     #[serde(default)]
     pub youngs_modulus: Option<f64>,
-    /// Orthotropic: the warp modulus `E1` (Pa, along the warp), > 0.
+    /// Orthotropic: the warp modulus `E1` (Pa, along the warp), > 0, <= 1e15.
     #[serde(default)]
     pub warp_modulus: Option<f64>,
     /// Orthotropic: the weft modulus `E2` (Pa, in-plane normal to the
-    /// warp), > 0.
+    /// warp), > 0, <= 1e15.
     #[serde(default)]
     pub weft_modulus: Option<f64>,
-    /// Orthotropic: the in-plane shear modulus `G12` (Pa), > 0.
+    /// Orthotropic: the in-plane shear modulus `G12` (Pa), > 0, <= 1e15.
     #[serde(default)]
     pub shear_modulus: Option<f64>,
     /// Poisson's ratio: isotropic `nu` in (-1, 0.5); orthotropic `nu12`
@@ -597,8 +599,13 @@ fn error_key(error: &mut toml::de::Error) -> Option<String> {
 /// errors, with the array index found from the line.
 fn parse_error(source: &str, path: &Path, mut e: toml::de::Error) -> ScenarioError {
     let line = line_at(source, e.span());
-    let mut message = e.message().trim().to_string();
+    let mut message = plain_message(source, &e);
     if let Some(key) = error_key(&mut e) {
+        if message.starts_with("expected one table") && !key.contains('.') {
+            message = format!(
+                "expected one table [{key}], found an array of tables [[{key}]] (or an array): write [{key}]"
+            );
+        }
         message = format!("`{}`: {message}", index_key(source, &key, line));
     }
     ScenarioError::Parse {
@@ -606,6 +613,27 @@ fn parse_error(source: &str, path: &Path, mut e: toml::de::Error) -> ScenarioErr
         line,
         message,
     }
+}
+
+/// serde's message of `e`, said in TOML's terms where serde's would
+/// mislead: a TOML date-time reaches serde as a map, and a table written
+/// as an array of tables (`[[mesh]]`) as a sequence.
+fn plain_message(source: &str, e: &toml::de::Error) -> String {
+    let message = e.message().trim();
+    let text = e
+        .span()
+        .and_then(|s| source.get(s))
+        .map(str::trim)
+        .unwrap_or_default();
+    if let Some(rest) = message.strip_prefix("invalid type: map")
+        && text.parse::<toml::value::Datetime>().is_ok()
+    {
+        return format!("invalid type: the date-time {text}{rest}");
+    }
+    if message.starts_with("wanted exactly 1 element") {
+        return "expected one table, found an array of tables (`[[...]]`) or an array: write the table's header with single brackets".into();
+    }
+    message.to_string()
 }
 
 /// An error inside a table read apart: its key path, and the choice of tag

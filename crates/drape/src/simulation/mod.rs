@@ -1071,8 +1071,10 @@ fn summary(
             "completed"
         }
         .into(),
-        message: failure
-            .unwrap_or_else(|| format!("completed {steps} steps to t = {:.6} s", state.time)),
+        message: failure.unwrap_or_else(|| {
+            let noun = if steps == 1 { "step" } else { "steps" };
+            format!("completed {steps} {noun} to t = {:.6} s", state.time)
+        }),
         at_rest: setup.rest.map(|_| false),
         title: setup.title.clone(),
         steps,
