@@ -1854,6 +1854,17 @@ const BAD_INPUTS: &[BadInput] = &[
         line: Some(3),
     },
     BadInput {
+        file: "duplicate_triangle_obj.toml",
+        fragments: &[
+            "`mesh.path`",
+            "duplicate_triangle.obj",
+            "elements 0 and 2",
+            "[2, 1, 0]",
+            "a triangle listed twice",
+        ],
+        line: Some(7),
+    },
+    BadInput {
         file: "schedule_overflow.toml",
         fragments: &[
             "`time.segments`",

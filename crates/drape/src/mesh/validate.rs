@@ -73,6 +73,19 @@ pub enum MeshError {
         /// The elements on it.
         elements: Vec<usize>,
     },
+    /// One triangle listed twice: two elements on the same corner nodes
+    /// (in either orientation).
+    #[error(
+        "elements {first} and {element} (0-based, in the order read) have the same corner nodes {nodes:?}: a triangle listed twice"
+    )]
+    Duplicate {
+        /// The first element on these nodes.
+        first: usize,
+        /// The element that repeats it.
+        element: usize,
+        /// Its corner nodes (0-based), as `element` lists them.
+        nodes: [usize; 3],
+    },
     /// Two neighbouring elements have opposite orientations (normals).
     #[error(
         "elements {element} and {neighbour} (0-based, in the order read) share an edge but are oriented oppositely (one of them is inverted)"
@@ -154,6 +167,24 @@ impl Mesh {
                 }
             }
         }
+        // A triangle listed twice would be reported below as two elements
+        // oriented oppositely (or as a T-junction): name it for what it is.
+        let mut corners: std::collections::HashMap<[usize; 3], usize> =
+            std::collections::HashMap::with_capacity(self.element_count());
+        for (e, el) in self.elements().enumerate() {
+            let nodes = [el[0], el[1], el[2]];
+            let mut key = nodes;
+            key.sort_unstable();
+            if let Some(&first) = corners.get(&key) {
+                return Err(MeshError::Duplicate {
+                    first,
+                    element: e,
+                    nodes,
+                });
+            }
+            corners.insert(key, e);
+        }
+        drop(corners);
         // Every edge on at most two elements (checked before orientation:
         // on a third, two of them would run along it the same way).
         let mut on_edge: std::collections::HashMap<(usize, usize), Vec<usize>> =
@@ -192,5 +223,53 @@ impl Mesh {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::ElementOrder;
+
+    fn square(connectivity: Vec<usize>) -> Mesh {
+        Mesh {
+            nodes: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ],
+            order: ElementOrder::Linear,
+            connectivity,
+        }
+    }
+
+    /// A triangle listed twice, the same way round or flipped, is named as
+    /// a duplicate (it was "oriented oppositely"); an element flipped
+    /// against a different neighbour still is.
+    #[test]
+    fn a_triangle_listed_twice_is_a_duplicate() {
+        for (second, nodes) in [([0, 1, 2], [0, 1, 2]), ([2, 1, 0], [2, 1, 0])] {
+            let mut c = vec![0, 1, 2, 0, 2, 3];
+            c.extend(second);
+            assert_eq!(
+                square(c).validate(),
+                Err(MeshError::Duplicate {
+                    first: 0,
+                    element: 2,
+                    nodes
+                })
+            );
+        }
+        assert_eq!(
+            square(vec![0, 1, 2, 0, 3, 2]).validate(),
+            Err(MeshError::InconsistentOrientation {
+                element: 0,
+                neighbour: 1
+            })
+        );
+        square(vec![0, 1, 2, 0, 2, 3])
+            .validate()
+            .expect("a good square");
     }
 }
