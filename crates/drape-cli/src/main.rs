@@ -12,12 +12,12 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 mod alloc;
 mod examples;
 mod measure;
+mod signals;
 
 /// Transparent huge pages for the large arrays of big meshes (see [`alloc`]).
 #[global_allocator]
@@ -357,6 +357,9 @@ fn run(
     quiet: bool,
     verbose: bool,
 ) -> Result<(), Failure> {
+    // Ctrl-C or SIGTERM while the scenario is read and built (a large
+    // mesh takes seconds) ends the process at once, saying so.
+    signals::install();
     // A resume holds its directory before it reads anything, so that a
     // refusal can be recorded in the summary without racing another writer.
     let resumed = match &resume {
@@ -383,6 +386,10 @@ fn run(
         }
         (None, None) => unreachable!("clap requires one of them"),
     };
+    // From here on (the directory is about to be written) a signal no
+    // longer ends the process at once: it asks the run to stop after its
+    // current step (checkpoint, summary).
+    signals::setup_done();
     let path = path.as_path();
     let out = resume.clone().or(out).unwrap_or_else(|| {
         let stem = path
@@ -414,7 +421,9 @@ fn run(
             })
             .and_then(|()| {
                 let abs = std::fs::canonicalize(path)?;
-                std::fs::write(out.join("scenario.path"), abs.to_string_lossy().as_bytes())
+                // The path's own bytes: a name that is not UTF-8 must be
+                // found again by --resume.
+                std::fs::write(out.join("scenario.path"), path_bytes(&abs))
             })
             .with_context(|| format!("cannot write into {}", out.display()))
             .map_err(|e| {
@@ -429,10 +438,6 @@ fn run(
                 }
             })?;
     }
-    static STOP: AtomicBool = AtomicBool::new(false);
-    // A second Ctrl-C while the step finishes does nothing more; the
-    // handler can only be set once per process.
-    let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
     let terminal = std::io::stderr().is_terminal();
     let start = Instant::now();
     let mut last_print = Instant::now();
@@ -503,7 +508,7 @@ fn run(
         }
     };
     let control = RunControl {
-        stop: Some(&STOP),
+        stop: Some(&signals::STOP),
         resume: resume.is_some(),
     };
     let result = simulation::run_with(&setup, &out, &mut observer, control);
@@ -595,17 +600,45 @@ fn record_refusal(dir: &Path, failure: Failure) -> Failure {
     }
 }
 
-/// The scenario a run in `dir` was started with (`dir/scenario.path`).
+/// The bytes of `path` as the operating system has them.
+#[cfg(unix)]
+fn path_bytes(path: &Path) -> Vec<u8> {
+    use std::os::unix::ffi::OsStrExt;
+    path.as_os_str().as_bytes().to_vec()
+}
+
+#[cfg(not(unix))]
+fn path_bytes(path: &Path) -> Vec<u8> {
+    path.to_string_lossy().into_owned().into_bytes()
+}
+
+/// The path whose bytes [`path_bytes`] gave.
+#[cfg(unix)]
+fn path_from_bytes(bytes: &[u8]) -> PathBuf {
+    use std::os::unix::ffi::OsStrExt;
+    PathBuf::from(std::ffi::OsStr::from_bytes(bytes))
+}
+
+#[cfg(not(unix))]
+fn path_from_bytes(bytes: &[u8]) -> PathBuf {
+    PathBuf::from(String::from_utf8_lossy(bytes).into_owned())
+}
+
+/// The scenario a run in `dir` was started with (`dir/scenario.path`,
+/// the path's bytes; a line end after them, as older runs wrote or an
+/// editor adds, is dropped).
 fn started_with(dir: &Path) -> Result<PathBuf, Failure> {
     let file = dir.join("scenario.path");
-    let text = std::fs::read_to_string(&file).map_err(|e| {
+    let bytes = std::fs::read(&file).map_err(|e| {
         Failure::Input(anyhow::anyhow!(
             "{}: {e}; is {} the output directory of a drape run? (or name the scenario: drape run SCENARIO --resume DIR)",
             file.display(),
             dir.display()
         ))
     })?;
-    Ok(PathBuf::from(text.trim()))
+    let bytes = bytes.strip_suffix(b"\n").unwrap_or(&bytes);
+    let bytes = bytes.strip_suffix(b"\r").unwrap_or(bytes);
+    Ok(path_from_bytes(bytes))
 }
 
 struct RenderArgs {

@@ -19,6 +19,7 @@ pub mod block3;
 pub mod contact;
 pub mod element;
 pub mod fd;
+pub mod input;
 pub mod integrator;
 pub mod load;
 pub mod material;

@@ -208,7 +208,7 @@ impl MeshReadError {
     /// Reads a whole mesh file, with its name as messages show it.
     pub(crate) fn read(path: &Path) -> Result<(Vec<u8>, String), MeshReadError> {
         let file = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|source| MeshReadError::Io {
+        let bytes = crate::input::read(path).map_err(|source| MeshReadError::Io {
             file: file.clone(),
             source,
         })?;

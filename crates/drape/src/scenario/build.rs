@@ -16,7 +16,7 @@ use crate::simulation::schedule::{AdaptiveSteps, RestCriterion};
 use crate::solver::NewtonSettings;
 use std::path::{Path, PathBuf};
 
-/// Most nodes a generated mesh may have: a guard against typos such as
+/// Most nodes a mesh may have (generated or read): a guard against typos such as
 /// `divisions = [20000, 20000]`, which would exhaust memory (a run needs
 /// about 1.6 kB per node with a direct solver; 3 million nodes, 6 million
 /// T3 elements, is ~5 GB).
@@ -138,12 +138,7 @@ impl InputFile {
     /// (a FIFO would block).
     pub fn hash_file(path: &Path) -> std::io::Result<u64> {
         use std::io::Read;
-        if !std::fs::metadata(path)?.is_file() {
-            return Err(std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                "not a regular file",
-            ));
-        }
+        crate::input::check_regular(path)?;
         let mut file = std::fs::File::open(path)?;
         let mut buffer = vec![0u8; 1 << 16];
         let mut h = FNV_OFFSET;
@@ -591,6 +586,20 @@ fn build_mesh(
         MeshShape::Disc => disc_mesh(c, spec, order, center)?,
         MeshShape::File => file_mesh(c, spec, order, base, inputs)?,
     };
+    // The generators are refused before they allocate; a file is read
+    // first (its readers bound their counts by the file's size).
+    if mesh.node_count() > MAX_GENERATED_NODES {
+        return Err(c.invalid(
+            "mesh",
+            None,
+            "path",
+            format!(
+                "{}: {} nodes, more than the limit {MAX_GENERATED_NODES} (a run needs about 1.6 kB a node)",
+                spec.path.as_deref().unwrap_or(Path::new("")).display(),
+                mesh.node_count()
+            ),
+        ));
+    }
     check_extent(c, spec, &mesh)?;
     mesh.validate().map_err(|e| ScenarioError::Mesh {
         file: c.file.to_path_buf(),
@@ -759,15 +768,30 @@ fn disc_mesh(
     )?;
     let rings = c.required(t, None, "rings", &spec.rings, "for shape = \"disc\"")?;
     let p = order.unwrap_or(ElementOrder::Linear).degree();
-    if rings == 0 || rings.saturating_mul(rings).saturating_mul(3 * p * p) > MAX_GENERATED_NODES {
+    // Ring k of node rings has 6k nodes: 1 + 3 n (n + 1) nodes for n = p
+    // rings of nodes per ring of elements.
+    let disc_nodes = |rings: usize| {
+        let n = rings.saturating_mul(p);
+        n.saturating_mul(n.saturating_add(1))
+            .saturating_mul(3)
+            .saturating_add(1)
+    };
+    let nodes = disc_nodes(rings);
+    if rings == 0 || nodes > MAX_GENERATED_NODES {
+        let mut most = ((MAX_GENERATED_NODES / (3 * p * p)) as f64).sqrt() as usize;
+        while disc_nodes(most) > MAX_GENERATED_NODES {
+            most -= 1;
+        }
+        let why = if rings == 0 {
+            String::new()
+        } else {
+            format!(" ({nodes} nodes, more than the limit {MAX_GENERATED_NODES})")
+        };
         return Err(c.invalid(
             t,
             None,
             "rings",
-            format!(
-                "must lie in 1..={}, not {rings}",
-                ((MAX_GENERATED_NODES / (3 * p * p)) as f64).sqrt() as usize
-            ),
+            format!("must lie in 1..={most}, not {rings}{why}"),
         ));
     }
     Ok(generate::disc(

@@ -528,7 +528,7 @@ impl Scenario {
     /// Reads and parses a scenario file (types and unknown keys checked;
     /// ranges are checked by [`Scenario::build`]).
     pub fn read(path: &Path) -> Result<(Self, String), ScenarioError> {
-        let bytes = std::fs::read(path).map_err(|e| ScenarioError::Io {
+        let bytes = crate::input::read(path).map_err(|e| ScenarioError::Io {
             file: path.to_path_buf(),
             error: e,
         })?;
