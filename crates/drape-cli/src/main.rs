@@ -341,6 +341,9 @@ fn check(path: &Path) -> Result<(), Failure> {
             )
         }
     }
+    for warning in simulation::warnings(&setup) {
+        println!("  warning   {warning}");
+    }
     for mon in &setup.monitors {
         println!(
             "  monitor   {} -> node {} at {:?}",
@@ -507,6 +510,9 @@ fn run(
             last_print = Instant::now();
         }
     };
+    for warning in simulation::warnings(&setup) {
+        eprintln!("warning: {warning}");
+    }
     let control = RunControl {
         stop: Some(&signals::STOP),
         resume: resume.is_some(),

@@ -7,7 +7,7 @@
 
 mod issue_19_support;
 
-use issue_19_support::{DRAPE, drape, falling_plate, scratch, text};
+use issue_19_support::{DRAPE, drape, falling_plate, run_into, scratch, text};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
@@ -24,13 +24,7 @@ fn scenario(dir: &Path, steps: usize) -> PathBuf {
 fn run(dir: &Path, steps: usize) -> PathBuf {
     let scenario = scenario(dir, steps);
     let out = dir.join("out");
-    let o = drape(&[
-        "run".as_ref(),
-        scenario.as_os_str(),
-        "--out".as_ref(),
-        out.as_os_str(),
-        "--quiet".as_ref(),
-    ]);
+    let o = run_into(&scenario, &out);
     assert!(o.status.success(), "{}", text(&o.stderr));
     out
 }

@@ -59,3 +59,14 @@ pub fn drape(args: &[&std::ffi::OsStr]) -> Output {
 pub fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
+
+/// `drape run SCENARIO --out OUT --quiet`.
+pub fn run_into(scenario: &Path, out: &Path) -> Output {
+    drape(&[
+        "run".as_ref(),
+        scenario.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--quiet".as_ref(),
+    ])
+}

@@ -29,6 +29,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 mod checkpoint;
 mod frames;
 pub mod schedule;
+mod warnings;
 use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
 use crate::integrator::{State, StaticStepper};
 use crate::model::Model;
@@ -44,6 +45,7 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+pub use warnings::{MAX_MOTION_PER_STEP, warnings};
 
 /// The stretch below which Saint-Venant–Kirchhoff loses stability in
 /// uniaxial compression: the nominal stress `Y lambda (lambda^2 - 1) / 2`
@@ -145,6 +147,10 @@ pub struct Summary {
     pub monitors: BTreeMap<String, [f64; 3]>,
     /// What the linear solver did (this session of the run).
     pub linear: crate::solver::LinearStats,
+    /// What the scenario may not do as it says ([`warnings`]); absent when
+    /// there is nothing to warn about.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// A run that stopped early; everything up to the last converged step is on disk.
@@ -1103,6 +1109,7 @@ fn summary(
             })
             .collect(),
         linear: Default::default(),
+        warnings: warnings(setup),
     }
 }
 
