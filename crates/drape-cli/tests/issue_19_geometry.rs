@@ -54,3 +54,60 @@ fn an_obstacle_faster_than_the_mesh_is_warned_about_and_recorded() {
     assert!(s.get("warnings").is_none(), "{s}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `dir/fall.toml` on the OBJ mesh `obj` (its text), written as `name`.
+fn on_obj(dir: &std::path::Path, name: &str, obj: &str) -> std::path::PathBuf {
+    std::fs::write(dir.join(name), obj).unwrap();
+    let scenario = falling_plate(dir, 2, "");
+    let text = std::fs::read_to_string(&scenario).unwrap().replace(
+        "shape = \"rectangle\"\nsize = [0.1, 0.1]\ndivisions = [4, 4]",
+        &format!("shape = \"file\"\npath = \"{name}\""),
+    );
+    std::fs::write(&scenario, text).unwrap();
+    scenario
+}
+
+/// An L-shaped hexagon written from a corner that does not see the whole
+/// face (a fan from it folds a triangle over): cut into ears, its mass is
+/// that of its area, 0.03 m^2 x 0.6 mm x 320 kg/m^3 = 5.76e-3 kg. A bent
+/// quad and a bow tie are refused naming the face and its line.
+#[test]
+fn obj_polygons_are_cut_into_ears_or_refused_by_face() {
+    let dir = scratch("geometry-polygons");
+    let l = "v 0 0 0\nv 0.2 0 0\nv 0.2 0.1 0\nv 0.1 0.1 0\nv 0.1 0.2 0\nv 0 0.2 0\nf 6 1 2 3 4 5\n";
+    let o = drape(&["check".as_ref(), on_obj(&dir, "l.obj", l).as_os_str()]);
+    let said = text(&o.stdout);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(said.contains("6 nodes, 4 triangles"), "{said}");
+    assert!(said.contains("mass      5.760000e-3 kg"), "{said}");
+
+    for (name, obj, fragments) in [
+        (
+            "bent.obj",
+            "v 0 0 0\nv 0.1 0 0\nv 0.1 0.1 0.01\nv 0 0.1 0\nf 1 2 3\nf 1 2 3 4\n",
+            &[
+                "bent.obj",
+                "line 6",
+                "face 2 (4 corners): it is not planar",
+                "off its plane",
+            ][..],
+        ),
+        (
+            "bow.obj",
+            "v 0 0 0\nv 0.2 0.2 0\nv 0.2 0 0\nv 0 0.1 0\nf 1 2 3 4\n",
+            &[
+                "bow.obj",
+                "line 5",
+                "face 1 (4 corners): it intersects itself",
+            ][..],
+        ),
+    ] {
+        let o = drape(&["check".as_ref(), on_obj(&dir, name, obj).as_os_str()]);
+        let e = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{e}");
+        for f in fragments {
+            assert!(e.contains(f), "expected {f:?} in {e}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

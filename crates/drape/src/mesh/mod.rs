@@ -19,6 +19,7 @@
 pub mod generate;
 pub mod gmsh;
 pub mod obj;
+pub mod polygon;
 mod read_error;
 mod validate;
 

@@ -12,10 +12,12 @@
 //!   coordinate is an error, even if no face uses it.
 //! * `f` faces, `v`, `v/vt`, `v//vn` or `v/vt/vn` per corner, with absolute
 //!   (1-based) or relative (negative) vertex indices. A face with more than
-//!   three corners is split into a fan of triangles about its first corner
-//!   (by `tobj`'s `triangulate` option): a quad `a b c d` gives `a b c` and
-//!   `a c d`. Only convex (or at least star-shaped about the first corner)
-//!   polygons give valid triangles. A face with fewer than three corners, or
+//!   three corners is cut into triangles by ear clipping
+//!   ([`super::polygon`]): a convex one into the fan about its first corner
+//!   (a quad `a b c d` gives `a b c` and `a c d`), a concave one into
+//!   triangles that do not overlap; a face that is not planar, has no area
+//!   or intersects itself is refused, naming its line and number. A face
+//!   with fewer than three corners, or
 //!   a corner that refers to a vertex that does not exist, is an error.
 //! * Objects (`o`) and groups (`g`), and material changes (`usemtl`), are
 //!   merged into one mesh. OBJ vertex indices are global to the file, so a
@@ -182,8 +184,9 @@ fn normalize(bytes: &[u8], file: &str) -> Result<Vec<u8>, MeshReadError> {
     // A UTF-8 byte-order mark, which some editors write, is skipped.
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let mut out = Vec::with_capacity(bytes.len());
-    // Pass 1: vertices.
+    // Pass 1: vertices (their positions kept for the polygons of pass 2).
     let mut vertices: u64 = 0;
+    let mut positions: Vec<[f64; 3]> = Vec::new();
     for (line, fields) in lines(bytes) {
         let [b"v", values @ ..] = fields.as_slice() else {
             continue;
@@ -227,6 +230,7 @@ fn normalize(bytes: &[u8], file: &str) -> Result<Vec<u8>, MeshReadError> {
                 value,
             });
         }
+        positions.push(x);
         out.extend_from_slice(b"v");
         for tok in xyz.iter().chain(&w) {
             out.push(b' ');
@@ -253,7 +257,7 @@ fn normalize(bytes: &[u8], file: &str) -> Result<Vec<u8>, MeshReadError> {
                         ),
                     ));
                 }
-                out.push(b'f');
+                let mut face: Vec<u64> = Vec::with_capacity(corners.len());
                 for corner in corners {
                     let v = corner.split(|&b| b == b'/').next().unwrap_or(corner);
                     let index = std::str::from_utf8(v)
@@ -298,14 +302,53 @@ fn normalize(bytes: &[u8], file: &str) -> Result<Vec<u8>, MeshReadError> {
                             node_tag: absolute,
                         });
                     }
-                    out.extend_from_slice(format!(" {absolute}").as_bytes());
+                    face.push(absolute);
                 }
-                out.push(b'\n');
+                for triangle in triangles(&face, &positions).map_err(|e| {
+                    syntax(line, format!("face {faces} ({} corners): {e}", face.len()))
+                })? {
+                    out.push(b'f');
+                    for corner in triangle {
+                        out.extend_from_slice(format!(" {corner}").as_bytes());
+                    }
+                    out.push(b'\n');
+                }
             }
             _ => {}
         }
     }
     Ok(out)
+}
+
+/// The triangles of the face `face` (1-based vertex indices into
+/// `positions`): itself when it has three corners; a polygon's ears
+/// ([`super::polygon`]), or why it has none. A polygon that repeats a
+/// vertex is passed on whole, for the mesh's check to name the repeat.
+fn triangles(
+    face: &[u64],
+    positions: &[[f64; 3]],
+) -> Result<Vec<Vec<u64>>, super::polygon::PolygonError> {
+    let repeats = face
+        .iter()
+        .enumerate()
+        .any(|(i, v)| face.iter().skip(i + 1).any(|w| w == v));
+    if face.len() == 3 || repeats {
+        return Ok(vec![face.to_vec()]);
+    }
+    let x: Vec<[f64; 3]> = face
+        .iter()
+        .map(|&v| {
+            usize::try_from(v)
+                .ok()
+                .and_then(|v| positions.get(v.wrapping_sub(1)))
+                .copied()
+                .unwrap_or([f64::NAN; 3])
+        })
+        .collect();
+    Ok(super::polygon::triangulate(&x)?
+        .into_iter()
+        .map(|t| t.iter().filter_map(|&k| face.get(k).copied()).collect())
+        .collect())
 }
 
 #[cfg(test)]
