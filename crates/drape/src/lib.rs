@@ -24,6 +24,7 @@ pub mod integrator;
 pub mod load;
 pub mod material;
 pub mod measure;
+pub mod memory;
 pub mod mesh;
 pub mod model;
 pub mod output;

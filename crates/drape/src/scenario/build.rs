@@ -182,6 +182,7 @@ impl Scenario {
             return Err(c.invalid("output", None, "every", "must be at least 1".into()));
         }
         let monitors = build_monitors(&c, &mesh, &self.monitors)?;
+        check_memory(&c, &self.mesh, mesh.node_count())?;
 
         let mut model = Model::new(
             mesh,
@@ -651,6 +652,37 @@ fn check_extent(c: &Checker, spec: &MeshSpec, mesh: &Mesh) -> Result<(), Scenari
         ),
     };
     Err(c.invalid("mesh", None, key, message))
+}
+
+/// The memory a run of `nodes` nodes needs ([`crate::memory::estimate`])
+/// against what the process may have ([`crate::memory::available`]),
+/// before the model's large allocations: over it, the mesh's key is
+/// refused with both figures.
+fn check_memory(c: &Checker, spec: &MeshSpec, nodes: usize) -> Result<(), ScenarioError> {
+    let need = crate::memory::estimate(nodes);
+    let Some((have, what)) = crate::memory::available() else {
+        return Ok(());
+    };
+    if need <= have {
+        return Ok(());
+    }
+    let key = match spec.shape {
+        MeshShape::Rectangle => "divisions",
+        MeshShape::Disc => "rings",
+        MeshShape::File => "path",
+    };
+    let mb = |b: u64| b as f64 / 1e6;
+    Err(c.invalid(
+        "mesh",
+        None,
+        key,
+        format!(
+            "{nodes} nodes need about {:.0} MB to run ({} bytes a node), more than the {:.0} MB {what}; use a coarser mesh or a larger machine",
+            mb(need),
+            crate::memory::BYTES_PER_NODE,
+            mb(have)
+        ),
+    ))
 }
 
 /// `[material]` moduli at most [`MAX_MODULUS`] (their positivity is
