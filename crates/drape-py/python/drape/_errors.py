@@ -8,7 +8,7 @@ them across processes).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+TYPE_CHECKING = False  # not typing's: see __init__.py
 
 if TYPE_CHECKING:  # `import drape` stays light: these are for the annotations
     from pathlib import Path
