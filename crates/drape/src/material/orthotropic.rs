@@ -376,11 +376,6 @@ impl Orthotropic {
         })
     }
 
-    fn elastic_stress(&self, e: [f64; 3]) -> [f64; 3] {
-        let s = mat_vec(&self.c, e);
-        [s[0] + self.prestress, s[1] + self.prestress, s[2]]
-    }
-
     fn slack(&self, tangent: bool) -> MaterialResponse {
         MaterialResponse {
             energy: 0.0,
@@ -399,9 +394,11 @@ impl Orthotropic {
         &self,
         e: [f64; 3],
     ) -> (MaterialResponse, Option<WrinkleState>) {
-        let s = self.elastic_stress(e);
+        // The elastic stress C e + sigma0 [1, 1, 0], one product with C.
+        let ce = mat_vec(&self.c, e);
+        let s = [ce[0] + self.prestress, ce[1] + self.prestress, ce[2]];
         let elastic = MaterialResponse {
-            energy: 0.5 * dot3(mat_vec(&self.c, e), e) + self.prestress * (e[0] + e[1]),
+            energy: 0.5 * dot3(ce, e) + self.prestress * (e[0] + e[1]),
             stress: s,
             tangent: self.c,
         };
