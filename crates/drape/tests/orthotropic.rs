@@ -7,7 +7,9 @@
 
 mod common;
 
-use common::{assert_error, build, equilibrium_with, read_history, setup, temp_dir};
+use common::{
+    assert_error, build, equilibrium_with, read_history, setup, sheared_equilibrium, temp_dir,
+};
 use drape::element::ElementGeometry;
 use drape::element::membrane::{Section, element_energy, element_force_hessian};
 use drape::element::quadrature::QuadratureRule;
@@ -807,41 +809,12 @@ every = 1
 "#
         );
         let mut s = setup(&text);
-        let x0 = s.model.initial_positions();
-        let sheared: Vec<f64> = x0
-            .chunks(3)
-            .flat_map(|x| [x[0] + gamma * x[1], x[1], x[2]])
-            .collect();
-        let mut start = sheared.clone();
-        for (i, v) in start.iter_mut().enumerate() {
-            if !s.model.fixed[i] {
-                *v += 1e-3 * ((i * 7) as f64).sin();
-            }
-        }
-        let mut ws = drape::integrator::newmark::DynamicWorkspace::new(&s.model).unwrap();
-        let mut state = drape::integrator::State::at_rest(&s.model, start);
-        s.newton.max_iterations = 50;
-        drape::integrator::StaticStepper
-            .step(
-                &s.model,
-                &mut state,
-                1.0,
-                &s.newton,
-                drape::simulation::reference_length(&x0),
-                &mut ws,
-            )
-            .unwrap();
-        let off = state
-            .positions
-            .iter()
-            .zip(&sheared)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let (positions, off) = sheared_equilibrium(&mut s, gamma);
         assert!(
             off < 1e-9,
             "{model}: interior off the homogeneous shear by {off:e} m"
         );
-        let results = s.model.element_results(&state.positions);
+        let results = s.model.element_results(&positions);
         for (el, (p, st)) in results.principal.iter().zip(&results.stress).enumerate() {
             assert_eq!(results.state[el], 1, "{model}: element {el} not wrinkled");
             assert!(

@@ -145,3 +145,35 @@ pub fn assert_error(text: &str, line: usize, key: &str, fragments: &[&str]) {
         );
     }
 }
+
+/// Static equilibrium of `s` (one step, Newton up to 50 iterations) with
+/// its held nodes placed on the simple shear `x += gamma y` and the free
+/// ones started off it (by up to 1 mm). Returns the positions and their
+/// largest distance from the homogeneous shear (m).
+pub fn sheared_equilibrium(s: &mut Setup, gamma: f64) -> (Vec<f64>, f64) {
+    let x0 = s.model.initial_positions();
+    let sheared: Vec<f64> = x0
+        .chunks(3)
+        .flat_map(|x| [x[0] + gamma * x[1], x[1], x[2]])
+        .collect();
+    let mut start = sheared.clone();
+    for (i, v) in start.iter_mut().enumerate() {
+        if !s.model.fixed[i] {
+            *v += 1e-3 * ((i * 7) as f64).sin();
+        }
+    }
+    let mut ws = drape::integrator::newmark::DynamicWorkspace::new(&s.model).unwrap();
+    let mut state = drape::integrator::State::at_rest(&s.model, start);
+    let length = drape::simulation::reference_length(&x0);
+    s.newton.max_iterations = 50;
+    drape::integrator::StaticStepper
+        .step(&s.model, &mut state, 1.0, &s.newton, length, &mut ws)
+        .unwrap();
+    let off = state
+        .positions
+        .iter()
+        .zip(&sheared)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    (state.positions, off)
+}
