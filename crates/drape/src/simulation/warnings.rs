@@ -8,6 +8,15 @@
 //!   step can pass between nodes, or through the whole fabric, without a
 //!   contact ever being seen (1 m per step goes through a 20 cm cloth
 //!   unnoticed).
+//! * **A tension field with bending.** A tension-field wrinkling model
+//!   (`stress-projection`, `relaxed-energy`) gives a compressed element no
+//!   in-plane stiffness: it stands for wrinkles finer than the mesh. With
+//!   a bending rigidity the folds are resolved by the mesh instead, and a
+//!   compressed element, free to shrink, can collapse towards a line,
+//!   where the bending patch's normal turns at will: the steps shrink to
+//!   fractions of a millisecond (docs/performance.md, "Settling with
+//!   bending"). With bending, `wrinkling = "none"` lets the folds carry
+//!   the compression.
 
 use super::schedule::DEFAULT_DT_MAX_FACTOR;
 use crate::scenario::{Analysis, Setup};
@@ -17,15 +26,37 @@ use crate::vec3::{norm, sub};
 /// fabric's smallest element edge, that is not warned about.
 pub const MAX_MOTION_PER_STEP: f64 = 0.5;
 
+/// A Green strain of uniform biaxial compression: every tension-field
+/// model calls it slack, and a material without one reports no state.
+const BIAXIAL_COMPRESSION: [f64; 3] = [-0.01, -0.01, 0.0];
+
 /// The warnings of `setup` (none for most scenarios).
 pub fn warnings(setup: &Setup) -> Vec<String> {
     let mut out = Vec::new();
+    tension_field_with_bending(setup, &mut out);
+    fast_obstacles(setup, &mut out);
+    out
+}
+
+/// A tension-field wrinkling model together with a bending rigidity.
+fn tension_field_with_bending(setup: &Setup, out: &mut Vec<String>) {
+    let model = &setup.model;
+    if model.bending.is_some() && model.material.wrinkle_state(BIAXIAL_COMPRESSION).is_some() {
+        out.push(
+            "material.wrinkling is a tension-field model and material.bending_rigidity is set: compressed elements have no in-plane stiffness and, with bending, may collapse, which makes the steps tiny; with bending the mesh resolves the folds, so wrinkling = \"none\" is the model to use (README, \"Bending\")".to_string(),
+        );
+    }
+}
+
+/// Obstacles that move more than [`MAX_MOTION_PER_STEP`] of the smallest
+/// element edge in a step.
+fn fast_obstacles(setup: &Setup, out: &mut Vec<String>) {
     let Some(contact) = &setup.model.contact else {
-        return out;
+        return;
     };
     // Load steps of a static analysis are not time: bodies do not move.
     let Analysis::Dynamic { segments, .. } = &setup.analysis else {
-        return out;
+        return;
     };
     let largest_dt = segments
         .iter()
@@ -52,5 +83,40 @@ pub fn warnings(setup: &Setup) -> Vec<String> {
             ));
         }
     }
-    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::Scenario;
+    use std::path::Path;
+
+    /// The warnings of a 4 x 4 square with `material` lines added.
+    fn warned(material: &str) -> Vec<String> {
+        let text = format!(
+            "title = \"w\"\n[mesh]\nshape = \"rectangle\"\nsize = [0.1, 0.1]\ndivisions = [4, 4]\n\
+             [material]\nyoungs_modulus = 2.0e6\npoisson_ratio = 0.3\ndensity = 320.0\nthickness = 0.6e-3\n{material}\n\
+             [time]\nsegments = [{{ steps = 1, dt = 0.01 }}]\n"
+        );
+        let path = Path::new("w.toml");
+        let setup = Scenario::parse(&text, path)
+            .and_then(|s| s.build(path, &text))
+            .expect("a valid scenario");
+        warnings(&setup)
+    }
+
+    #[test]
+    fn a_tension_field_with_bending_is_warned_about() {
+        for model in ["stress-projection", "relaxed-energy"] {
+            let w = warned(&format!(
+                "wrinkling = \"{model}\"\nbending_rigidity = 2.0e-5"
+            ));
+            assert_eq!(w.len(), 1, "{model}: {w:?}");
+            assert!(w[0].contains("wrinkling = \"none\""), "{w:?}");
+        }
+        // Either alone is what it says.
+        assert!(warned("wrinkling = \"none\"\nbending_rigidity = 2.0e-5").is_empty());
+        assert!(warned("wrinkling = \"stress-projection\"").is_empty());
+        assert!(warned("").is_empty());
+    }
 }
