@@ -40,8 +40,9 @@ enum Command {
     /// exit code is 1 when the run fails (everything computed so far is
     /// kept) and 2 when the scenario is invalid.
     ///
-    /// Ctrl-C or SIGTERM ends the current step, writes a checkpoint and the
-    /// summary (status "interrupted") and exits with code 130; `--resume
+    /// Ctrl-C, SIGTERM or SIGHUP ends the current step, writes a checkpoint
+    /// and the summary (status "interrupted") and exits with code 128 + the
+    /// signal (130, 143 or 129); `--resume
     /// DIR` continues from the newest checkpoint in DIR, and refuses if
     /// the scenario or a file it reads (the mesh, an obstacle's mesh) has
     /// changed.
@@ -169,7 +170,8 @@ enum Command {
     },
 }
 
-/// An input error (exit 2), a run failure (exit 1) or an interruption (130).
+/// An input error (exit 2), a run failure (exit 1) or an interruption
+/// (128 + the signal: 130, 143 or 129).
 enum Failure {
     Input(anyhow::Error),
     Run(anyhow::Error),
@@ -274,8 +276,10 @@ fn main() -> ExitCode {
             ExitCode::from(1)
         }
         Err(Failure::Interrupted(e)) => {
-            eprintln!("{e:#}");
-            ExitCode::from(130)
+            // The shell's code of the signal that stopped the run.
+            let (signal, name) = signals::received();
+            eprintln!("{name}: {e:#}");
+            ExitCode::from(signals::exit_code(signal))
         }
     }
 }

@@ -2,12 +2,15 @@
 //! device given as an input is refused by its path without blocking, a
 //! disc above the node cap is refused before it is generated (under an
 //! address-space limit too), a signal while the run is set up ends it with
-//! a message and 128 + the signal, and a scenario path that is not UTF-8
-//! is found again by `--resume`.
+//! a message and 128 + the signal, as a signal during the run does after
+//! its orderly stop, and a scenario path that is not UTF-8 is found again
+//! by `--resume`.
 
 mod issue_19_support;
 
-use issue_19_support::{DRAPE, falling_plate, scratch, text};
+use issue_19_support::{
+    DRAPE, falling_plate, history_rows, scratch, send, spawn_run, summary, text, wait_for_history,
+};
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -159,12 +162,7 @@ fn a_signal_during_set_up_ends_the_run_with_a_message() {
             .spawn()
             .expect("spawn drape");
         std::thread::sleep(Duration::from_millis(300));
-        let sent = Command::new("kill")
-            .arg(format!("-{signal}"))
-            .arg(child.id().to_string())
-            .status()
-            .expect("kill");
-        assert!(sent.success());
+        send(&child, signal);
         let start = Instant::now();
         let o = child.wait_with_output().expect("wait");
         assert!(start.elapsed() < Duration::from_secs(5), "not at once");
@@ -175,6 +173,42 @@ fn a_signal_during_set_up_ends_the_run_with_a_message() {
             !out.exists(),
             "SIG{signal} during set-up left {}",
             out.display()
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// SIGTERM, SIGHUP and SIGINT once the run is under way: the run stops
+/// in order — its step finished, a checkpoint, the summary "interrupted"
+/// counting the history's rows — and the process exits with 128 + the
+/// signal (143, 129, 130; SIGTERM exited 130), saying which signal it was.
+#[cfg(unix)]
+#[test]
+fn a_signal_during_the_run_stops_it_with_128_plus_the_signal() {
+    let dir = scratch("limits-signal-run");
+    let scenario = falling_plate(
+        &dir,
+        1_000_000,
+        "[output]\nevery = 1000\ncheckpoint_every = 100",
+    );
+    for (signal, code) in [("TERM", 143), ("HUP", 129), ("INT", 130)] {
+        let out = dir.join(format!("out-{signal}"));
+        let child = spawn_run(&scenario, &out);
+        wait_for_history(&out, 20);
+        send(&child, signal);
+        let o = child.wait_with_output().expect("wait");
+        let e = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(code), "SIG{signal}: {e}");
+        assert!(
+            e.contains(&format!("SIG{signal}: interrupted after step")),
+            "{e}"
+        );
+        let s = summary(&out);
+        assert_eq!(s["status"], "interrupted", "{s}");
+        assert!(out.join("checkpoint.bin").is_file());
+        assert_eq!(
+            s["steps"].as_u64().unwrap() as usize + 1,
+            history_rows(&out)
         );
     }
     let _ = std::fs::remove_dir_all(&dir);
