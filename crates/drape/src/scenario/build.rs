@@ -10,17 +10,11 @@ use super::{
 use crate::bending::BendingError;
 use crate::integrator::Newmark;
 use crate::load::{Load, LoadKind};
-use crate::mesh::{ElementOrder, Mesh, generate};
+use crate::mesh::{ElementOrder, MAX_MESH_NODES, Mesh, generate};
 use crate::model::{Model, ModelError};
 use crate::simulation::schedule::{AdaptiveSteps, RestCriterion};
 use crate::solver::NewtonSettings;
 use std::path::{Path, PathBuf};
-
-/// Most nodes a mesh may have (generated or read): a guard against typos such as
-/// `divisions = [20000, 20000]`, which would exhaust memory (a run needs
-/// about 1.6 kB per node with a direct solver; 3 million nodes, 6 million
-/// T3 elements, is ~5 GB).
-const MAX_GENERATED_NODES: usize = 3_000_000;
 
 /// The largest coordinate a mesh node may have (m): a fabric is not a
 /// continent, and beyond it the mesh's areas, masses and forces lose their
@@ -587,20 +581,8 @@ fn build_mesh(
         MeshShape::Disc => disc_mesh(c, spec, order, center)?,
         MeshShape::File => file_mesh(c, spec, order, base, inputs)?,
     };
-    // The generators are refused before they allocate; a file is read
-    // first (its readers bound their counts by the file's size).
-    if mesh.node_count() > MAX_GENERATED_NODES {
-        return Err(c.invalid(
-            "mesh",
-            None,
-            "path",
-            format!(
-                "{}: {} nodes, more than the limit {MAX_GENERATED_NODES} (a run needs about 1.6 kB a node)",
-                spec.path.as_deref().unwrap_or(Path::new("")).display(),
-                mesh.node_count()
-            ),
-        ));
-    }
+    // The generators are refused from their counts before they generate,
+    // a file by its reader before it reads more nodes than the cap.
     check_extent(c, spec, &mesh)?;
     mesh.validate().map_err(|e| ScenarioError::Mesh {
         file: c.file.to_path_buf(),
@@ -709,7 +691,7 @@ fn check_moduli(c: &Checker, m: &super::MaterialSpec) -> Result<(), ScenarioErro
 }
 
 /// `[mesh] shape = "rectangle"`: `size` and `divisions`, at most
-/// [`MAX_GENERATED_NODES`] nodes.
+/// [`MAX_MESH_NODES`] nodes.
 fn rectangle_mesh(
     c: &Checker,
     spec: &MeshSpec,
@@ -755,12 +737,12 @@ fn rectangle_mesh(
     }
     let nodes = (div[0].saturating_mul(p).saturating_add(1))
         .saturating_mul(div[1].saturating_mul(p).saturating_add(1));
-    if nodes > MAX_GENERATED_NODES {
+    if nodes > MAX_MESH_NODES {
         return Err(c.invalid(
             t,
             None,
             "divisions",
-            format!("{div:?} would make {nodes} nodes, more than the limit {MAX_GENERATED_NODES}"),
+            format!("{div:?} would make {nodes} nodes, more than the limit {MAX_MESH_NODES}"),
         ));
     }
     Ok(generate::rectangle(
@@ -773,7 +755,7 @@ fn rectangle_mesh(
 }
 
 /// `[mesh] shape = "disc"`: `radius` and `rings`, at most
-/// [`MAX_GENERATED_NODES`] nodes.
+/// [`MAX_MESH_NODES`] nodes.
 fn disc_mesh(
     c: &Checker,
     spec: &MeshSpec,
@@ -809,15 +791,15 @@ fn disc_mesh(
             .saturating_add(1)
     };
     let nodes = disc_nodes(rings);
-    if rings == 0 || nodes > MAX_GENERATED_NODES {
-        let mut most = ((MAX_GENERATED_NODES / (3 * p * p)) as f64).sqrt() as usize;
-        while disc_nodes(most) > MAX_GENERATED_NODES {
+    if rings == 0 || nodes > MAX_MESH_NODES {
+        let mut most = ((MAX_MESH_NODES / (3 * p * p)) as f64).sqrt() as usize;
+        while disc_nodes(most) > MAX_MESH_NODES {
             most -= 1;
         }
         let why = if rings == 0 {
             String::new()
         } else {
-            format!(" ({nodes} nodes, more than the limit {MAX_GENERATED_NODES})")
+            format!(" ({nodes} nodes, more than the limit {MAX_MESH_NODES})")
         };
         return Err(c.invalid(
             t,
