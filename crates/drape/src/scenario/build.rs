@@ -177,6 +177,7 @@ impl Scenario {
         }
         let monitors = build_monitors(&c, &mesh, &self.monitors)?;
         check_memory(&c, &self.mesh, mesh.node_count())?;
+        check_pattern_memory(&c, &self.mesh, &mesh, bending.is_some())?;
 
         let mut model = Model::new(
             mesh,
@@ -648,23 +649,93 @@ fn check_memory(c: &Checker, spec: &MeshSpec, nodes: usize) -> Result<(), Scenar
     if need <= have {
         return Ok(());
     }
-    let key = match spec.shape {
-        MeshShape::Rectangle => "divisions",
-        MeshShape::Disc => "rings",
-        MeshShape::File => "path",
-    };
-    let mb = |b: u64| b as f64 / 1e6;
     Err(c.invalid(
         "mesh",
         None,
-        key,
+        mesh_size_key(spec),
         format!(
             "{nodes} nodes need about {:.0} MB to run ({} bytes a node), more than the {:.0} MB {what}; use a coarser mesh or a larger machine",
-            mb(need),
+            megabytes(need),
             crate::memory::BYTES_PER_NODE,
-            mb(have)
+            megabytes(have)
         ),
     ))
+}
+
+/// The memory the Hessian's pattern needs ([`crate::memory::pattern_estimate`]
+/// of its blocks: the elements', and the bending patches' stencils with
+/// `bending`) against what the process may still allocate
+/// ([`crate::memory::headroom`]), before the model allocates it: over it,
+/// the mesh's key is refused with both figures. The pattern depends on the
+/// elements' order and on bending (its stencils reach the nodes opposite a
+/// triangle's edges), so it may not fit where the mesh's estimate did. A
+/// bound of the blocks (every stencil's square) passes most meshes at
+/// once; the exact count, which walks the mesh's topology, is made only
+/// when the bound does not fit. A mesh whose bending stencils cannot be
+/// found (a non-manifold edge) is left to the model, which says why.
+fn check_pattern_memory(
+    c: &Checker,
+    spec: &MeshSpec,
+    mesh: &Mesh,
+    bending: bool,
+) -> Result<(), ScenarioError> {
+    use crate::memory::{BYTES_PER_BLOCK, headroom, pattern_estimate};
+    let Some((have, what)) = headroom() else {
+        return Ok(());
+    };
+    let n = mesh.order.nodes_per_element();
+    let sub_triangles = mesh.element_count() * mesh.order.degree().pow(2);
+    let bound = mesh.node_count()
+        + mesh.element_count() * n * n
+        + usize::from(bending) * 36 * sub_triangles;
+    if pattern_estimate(bound) <= have {
+        return Ok(());
+    }
+    let nodes = mesh.node_count();
+    let blocks = if bending {
+        let Ok((ptr, stencil_nodes)) = crate::bending::stencils_of(mesh) else {
+            return Ok(());
+        };
+        let stencils = ptr.windows(2).map(|w| &stencil_nodes[w[0]..w[1]]);
+        crate::solver::pattern::block_count(nodes, mesh.elements().chain(stencils))
+    } else {
+        crate::solver::pattern::block_count(nodes, mesh.elements())
+    };
+    let need = pattern_estimate(blocks);
+    if need <= have {
+        return Ok(());
+    }
+    let stencils = if bending {
+        ", with bending's stencils"
+    } else {
+        ""
+    };
+    Err(c.invalid(
+        "mesh",
+        None,
+        mesh_size_key(spec),
+        format!(
+            "the Hessian's sparse pattern of these {nodes} nodes (order {}{stencils}) has {blocks} blocks of 3x3 and needs about {:.0} MB for its values and indices ({BYTES_PER_BLOCK} bytes a block, before the linear solver's factor), more than the {:.0} MB {what}; use a coarser mesh, a lower order or a larger machine",
+            mesh.order.degree(),
+            megabytes(need),
+            megabytes(have)
+        ),
+    ))
+}
+
+/// The `[mesh]` key that sets the mesh's size: `divisions`, `rings` or
+/// `path`.
+fn mesh_size_key(spec: &MeshSpec) -> &'static str {
+    match spec.shape {
+        MeshShape::Rectangle => "divisions",
+        MeshShape::Disc => "rings",
+        MeshShape::File => "path",
+    }
+}
+
+/// Bytes in MB (10^6), for messages.
+fn megabytes(bytes: u64) -> f64 {
+    bytes as f64 / 1e6
 }
 
 /// `[material]` moduli at most [`MAX_MODULUS`] (their positivity is
