@@ -545,6 +545,22 @@ pub fn record_failure(
     write_atomic(&path, text.as_bytes())
 }
 
+/// Records in `out/summary.json` that a resume was refused — after it took
+/// the directory's lock, before its loop — for `why` (a changed or
+/// missing input file, a checkpoint it cannot use, a scenario that no
+/// longer reads): status `"failed"`, message `"cannot resume: {why}"`, the
+/// counts of the session the history and checkpoint come from kept (see
+/// [`record_failure`]; a `"completed"` run's summary is left alone).
+/// Returns the message. The command line and the Python package record
+/// their refusals with it, so that they say the same.
+///
+/// # Errors
+/// The summary could not be written.
+pub fn record_refused_resume(out: &Path, why: &dyn std::fmt::Display) -> std::io::Result<String> {
+    let message = format!("cannot resume: {why}");
+    record_failure(out, None, true, &message).map(|()| message)
+}
+
 /// [`run_with`] but for the summary of a failure before the loop;
 /// `recorded` is set once the loop has ended (and written its summary).
 fn run_session(
