@@ -40,8 +40,9 @@ enum Command {
     /// exit code is 1 when the run fails (everything computed so far is
     /// kept) and 2 when the scenario is invalid.
     ///
-    /// Ctrl-C or SIGTERM ends the current step, writes a checkpoint and the
-    /// summary (status "interrupted") and exits with code 130; `--resume
+    /// Ctrl-C, SIGTERM or SIGHUP ends the current step, writes a checkpoint
+    /// and the summary (status "interrupted") and exits with code 128 + the
+    /// signal (130, 143 or 129); `--resume
     /// DIR` continues from the newest checkpoint in DIR, and refuses if
     /// the scenario or a file it reads (the mesh, an obstacle's mesh) has
     /// changed.
@@ -169,7 +170,8 @@ enum Command {
     },
 }
 
-/// An input error (exit 2), a run failure (exit 1) or an interruption (130).
+/// An input error (exit 2), a run failure (exit 1) or an interruption
+/// (128 + the signal: 130, 143 or 129).
 enum Failure {
     Input(anyhow::Error),
     Run(anyhow::Error),
@@ -274,8 +276,10 @@ fn main() -> ExitCode {
             ExitCode::from(1)
         }
         Err(Failure::Interrupted(e)) => {
-            eprintln!("{e:#}");
-            ExitCode::from(130)
+            // The shell's code of the signal that stopped the run.
+            let (signal, name) = signals::received();
+            eprintln!("{name}: {e:#}");
+            ExitCode::from(signals::exit_code(signal))
         }
     }
 }
@@ -366,7 +370,7 @@ fn run(
     // A resume holds its directory before it reads anything, so that a
     // refusal can be recorded in the summary without racing another writer.
     let resumed = match &resume {
-        Some(dir) => Some(resume_lock(dir)?),
+        Some(dir) => Some(directory::lock_resume(dir).map_err(|e| Failure::Input(e.into()))?),
         None => None,
     };
     let (path, setup) = match (&scenario, &resume) {
@@ -561,44 +565,18 @@ fn run(
     }
 }
 
-/// The lock of the directory a resume continues in: it must be there and
-/// hold a run's outputs (nothing is created in a directory that does not).
-fn resume_lock(dir: &Path) -> Result<directory::OutputLock, Failure> {
-    if !dir.is_dir() {
-        return Err(Failure::Input(anyhow::anyhow!(
-            "--resume {}: {}; name the output directory of a drape run",
-            dir.display(),
-            if dir.exists() {
-                "not a directory"
-            } else {
-                "no such directory"
-            }
-        )));
-    }
-    if !holds_a_run(dir) {
-        return Err(Failure::Input(anyhow::anyhow!(
-            "--resume {}: it holds no drape run (no checkpoint.bin, summary.json or scenario.path); name the output directory of a run",
-            dir.display()
-        )));
-    }
-    directory::lock(dir).map_err(|e| Failure::Input(e.into()))
-}
-
-/// Whether `dir` holds a run's outputs.
-fn holds_a_run(dir: &Path) -> bool {
-    ["checkpoint.bin", "summary.json", "scenario.path"]
-        .iter()
-        .any(|f| dir.join(f).is_file())
-}
-
 /// A resume refused after its directory was locked: the refusal goes into
 /// the directory's summary (status "failed", its counts kept; a completed
 /// run's summary is left alone), and is returned.
 fn record_refusal(dir: &Path, failure: Failure) -> Failure {
     let (Failure::Input(e) | Failure::Run(e) | Failure::Interrupted(e)) = &failure;
-    let message = format!("cannot resume: {e:#}");
-    match simulation::record_failure(dir, None, true, &message) {
-        Ok(()) => failure,
+    // A refusal of the inputs says "cannot resume" itself: once is enough.
+    let recorded = match e.downcast_ref::<RunError>() {
+        Some(RunError::Resume(why)) => simulation::record_refused_resume(dir, why),
+        _ => simulation::record_refused_resume(dir, &format!("{e:#}")),
+    };
+    match recorded {
+        Ok(_) => failure,
         Err(s) => Failure::Input(anyhow::anyhow!(
             "{e:#}; and {} could not be written: {s}",
             dir.join("summary.json").display()

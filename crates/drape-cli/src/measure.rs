@@ -81,8 +81,9 @@ impl Run {
     /// Measures frame `index` of [`OutputDir::frames`].
     ///
     /// # Errors
-    /// A frame that does not read or is not a triangle mesh of one order;
-    /// an instrument that cannot be found (naming the scenario file).
+    /// A frame that does not read, holds a value that is not finite or is
+    /// not a triangle mesh of one order; an instrument that cannot be found
+    /// (naming the scenario file).
     pub fn measure(&self, index: usize) -> anyhow::Result<FrameMeasurement> {
         let entry = self
             .out
@@ -91,6 +92,8 @@ impl Run {
             .ok_or_else(|| anyhow!("no frame {index} in {}", self.out.dir.display()))?
             .clone();
         let frame = drape_render::vtu::read_vtu(&entry.path)?;
+        // A damaged frame would be measured as a wrong shadow, or none.
+        frame.check_finite()?;
         let (connectivity, order) = elements(&frame)?;
         let initial = initial_positions(&frame)?;
         let mesh = Mesh {

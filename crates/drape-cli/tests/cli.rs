@@ -1453,14 +1453,27 @@ const BAD_INPUTS: &[BadInput] = &[
         file: "huge_count_msh.toml",
         fragments: &[
             "`mesh.path`",
-            "huge_count.msh, line 9",
-            "node 4 of 1000000000000",
+            "huge_count.msh, line 5",
+            "$Nodes declares 1000000000000 nodes",
         ],
         line: Some(6),
     },
     BadInput {
         file: "huge_count_41_msh.toml",
-        fragments: &["`mesh.path`", "huge_count_41.msh, line 10", "node tag"],
+        fragments: &[
+            "`mesh.path`",
+            "huge_count_41.msh, line 5",
+            "$Nodes declares 1000000000000 nodes",
+        ],
+        line: Some(6),
+    },
+    BadInput {
+        file: "declared_too_many_msh.toml",
+        fragments: &[
+            "`mesh.path`",
+            "declared_too_many.msh, line 5",
+            "$Nodes declares 3000001 nodes, more than the 3000000 nodes a mesh may have",
+        ],
         line: Some(6),
     },
     BadInput {
@@ -1492,7 +1505,11 @@ const BAD_INPUTS: &[BadInput] = &[
     },
     BadInput {
         file: "binary_huge_msh.toml",
-        fragments: &["`mesh.path`", "binary_huge.msh", "$Nodes"],
+        fragments: &[
+            "`mesh.path`",
+            "binary_huge.msh, byte",
+            "$Nodes declares 1000000000000 nodes",
+        ],
         line: Some(6),
     },
     BadInput {

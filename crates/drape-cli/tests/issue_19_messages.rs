@@ -1,6 +1,6 @@
-//! Issue 19: messages that misled now say what is wrong, and `plot` and
-//! `render` refuse (exit 2) what they cannot interpret rather than draw
-//! empty panels or a blank image. (The scenario's messages — a modulus of
+//! Issue 19: messages that misled now say what is wrong, and `plot`,
+//! `render` and `measure` refuse (exit 2) what they cannot interpret rather
+//! than draw empty panels or a blank image, or measure nonsense. (The scenario's messages — a modulus of
 //! 1e308, a size of 1e200, a centre at 1e17 m, a node at 1e300 m,
 //! `[[mesh]]`, a date-time, a schedule that overflows — are cases of the
 //! bad-input catalogue in cli.rs.)
@@ -109,19 +109,19 @@ fn plot_refuses_a_history_it_cannot_interpret() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// The last frame rewritten with a NaN position: render refuses it
-/// naming the frame and the point (it drew a blank image, exit 0).
-#[test]
-fn render_refuses_a_frame_without_positions() {
+/// What to damage in a frame: `"points"` or an array, the index of the
+/// value (in the flattened positions or the array), the value to put.
+type Damage<'a> = (&'a str, usize, f64);
+
+/// `frame` rewritten as the 4 x 4 plate's 25 points and 32 triangles at
+/// rest, its point arrays `displacement` and `velocity` and its cell array
+/// `stress` zero, then each value `damage` names — the point (`"points"`)
+/// or the array, the value's index, the value — set.
+fn write_damaged_frame(frame: &Path, damage: Damage) {
     use drape::output::vtu::{DataArray, Frame, Values, write_vtu};
-    let dir = scratch("msg-nan");
-    let out = run(&dir, 3);
-    let frame = out.join("fields/step_000003.vtu");
-    assert!(frame.is_file());
     let mut positions: Vec<[f64; 3]> = (0..25)
         .map(|k| [0.025 * (k % 5) as f64, 0.025 * (k / 5) as f64, 0.0])
         .collect();
-    positions[7] = [f64::NAN, 0.0, 0.0];
     let connectivity: Vec<usize> = (0..4)
         .flat_map(|j| (0..4).map(move |i| (i, j)))
         .flat_map(|(i, j)| {
@@ -136,35 +136,105 @@ fn render_refuses_a_frame_without_positions() {
             ]
         })
         .collect();
-    let zeros = vec![0.0; 75];
+    let (mut displacement, mut velocity, mut stress) =
+        (vec![0.0; 75], vec![0.0; 75], vec![0.0; 96]);
+    let (what, at, value) = damage;
+    match what {
+        "points" => positions[at / 3][at % 3] = value,
+        "displacement" => displacement[at] = value,
+        "velocity" => velocity[at] = value,
+        "stress" => stress[at] = value,
+        _ => unreachable!("{what}"),
+    }
+    let array = |name, components, values| DataArray {
+        name,
+        components,
+        values: Values::F64(values),
+        component_names: &[],
+    };
     write_vtu(
-        &frame,
+        frame,
         &Frame {
             positions: &positions,
             connectivity: &connectivity,
             nodes_per_element: 3,
-            point_data: vec![DataArray {
-                name: "displacement",
-                components: 3,
-                values: Values::F64(&zeros),
-                component_names: &[],
-            }],
-            cell_data: vec![],
+            point_data: vec![
+                array("displacement", 3, &displacement),
+                array("velocity", 3, &velocity),
+            ],
+            cell_data: vec![array("stress", 3, &stress)],
             time: 0.003,
         },
     )
     .unwrap();
+}
+
+/// The last frame rewritten with a value that is not finite — a point's
+/// position, a point array's value, a cell array's value: `render` refuses
+/// it naming the frame, the array and the first node or cell (with a NaN
+/// point it drew a blank image, exit 0; a NaN velocity or an infinite
+/// stress was drawn), and `measure` refuses it likewise (it measured).
+#[test]
+fn render_and_measure_refuse_a_frame_that_is_not_finite() {
+    let dir = scratch("msg-nan");
+    let out = run(&dir, 3);
+    let frame = out.join("fields/step_000003.vtu");
+    assert!(frame.is_file());
     let png = dir.join("render.png");
-    refused(
-        &[
-            "render".as_ref(),
-            out.as_os_str(),
-            "-o".as_ref(),
-            png.as_os_str(),
-        ],
-        &png,
-        &["step_000003.vtu", "point 7", "no finite position"],
-    );
+    let render: [&std::ffi::OsStr; 4] = [
+        "render".as_ref(),
+        out.as_os_str(),
+        "-o".as_ref(),
+        png.as_os_str(),
+    ];
+    let measure: [&std::ffi::OsStr; 6] = [
+        "measure".as_ref(),
+        out.as_os_str(),
+        "--pedestal-radius".as_ref(),
+        "0.02".as_ref(),
+        "--specimen-radius".as_ref(),
+        "0.05".as_ref(),
+    ];
+    let cases: [(Damage, &[&str]); 4] = [
+        (
+            ("points", 3 * 7, f64::NAN),
+            &["point 7", "no finite position"],
+        ),
+        (
+            ("displacement", 3 * 12 + 2, f64::INFINITY),
+            &[
+                "point array \"displacement\" holds inf at node 12",
+                "component 2",
+            ],
+        ),
+        (
+            ("velocity", 3 * 3 + 1, f64::NAN),
+            &[
+                "point array \"velocity\" holds NaN at node 3",
+                "component 1",
+            ],
+        ),
+        (
+            ("stress", 3 * 5 + 2, f64::NEG_INFINITY),
+            &["cell array \"stress\" holds -inf at cell 5", "component 2"],
+        ),
+    ];
+    for (damage, said) in cases {
+        write_damaged_frame(&frame, damage);
+        let fragments = [&["step_000003.vtu", "the frame is damaged"], said].concat();
+        refused(&render, &png, &fragments);
+        let o = drape(&measure);
+        let e = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "measure {damage:?}: {e}");
+        for f in &fragments {
+            assert!(e.contains(f), "measure: expected {f:?} in {e}");
+        }
+    }
+    // The same frame undamaged is drawn and measured.
+    write_damaged_frame(&frame, ("velocity", 0, 0.0));
+    assert!(drape(&render).status.success());
+    let o = drape(&measure);
+    assert!(o.status.success(), "{}", text(&o.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -2,59 +2,19 @@
 //! fresh run that clears its previous outputs, and nobody else's files
 //! touched.
 
+mod issue_19_support;
+
+use issue_19_support::{DRAPE, falling_plate, run_into as run, scratch, text};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-const DRAPE: &str = env!("CARGO_BIN_EXE_drape");
-
-/// A fresh scratch directory for `name`.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("drape-issue19-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch directory");
-    dir
-}
-
 /// A tiny scenario (a 4 x 4 patch falling for 3 steps) written into `dir`.
 fn tiny_scenario(dir: &Path) -> PathBuf {
-    let path = dir.join("tiny.toml");
-    std::fs::write(
-        &path,
-        r#"
-[mesh]
-shape = "rectangle"
-size = [0.1, 0.1]
-divisions = [4, 4]
-[material]
-youngs_modulus = 2.0e6
-poisson_ratio = 0.3
-density = 320.0
-thickness = 0.6e-3
-[[load]]
-kind = "gravity"
-acceleration = [0.0, 0.0, -9.8]
-[time]
-segments = [{ steps = 3, dt = 1e-3 }]
-"#,
-    )
-    .expect("write the scenario");
-    path
-}
-
-fn run(scenario: &Path, out: &Path) -> Output {
-    Command::new(DRAPE)
-        .arg("run")
-        .arg(scenario)
-        .arg("--out")
-        .arg(out)
-        .arg("--quiet")
-        .stdin(std::process::Stdio::null())
-        .output()
-        .expect("spawn drape")
+    falling_plate(dir, 3, "")
 }
 
 fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
+    text(&o.stderr)
 }
 
 /// While another process holds the directory (here the test itself, a

@@ -1,17 +1,19 @@
 //! Issue 19: once a run holds its output directory, every failure leaves a
-//! `summary.json` that says `"failed"` and why — a frame that cannot be
-//! written, a resume refused for a changed scenario (for a changed input
+//! `summary.json` that says `"failed"` and why — a frame or a history row
+//! that cannot be written (the summary then describes the history on
+//! disk), a resume refused for a changed scenario (for a changed input
 //! file: `resume_inputs.rs`) — and a
 //! resume that is refused never creates or takes over a directory that is
 //! not a run's.
 
 mod issue_19_support;
 
-use issue_19_support::{DRAPE, drape as drape_args, falling_plate, scratch, text};
-use serde_json::Value;
+use issue_19_support::{
+    DRAPE, drape as drape_args, falling_plate, history_rows, scratch, spawn_run, summary, text,
+    wait_for_history,
+};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
 
 /// The plate of [`falling_plate`], a frame every step and a checkpoint
 /// every 5.
@@ -38,20 +40,6 @@ fn mark_interrupted(out: &Path) {
     std::fs::write(out.join("summary.json"), s.to_string()).unwrap();
 }
 
-fn summary(out: &Path) -> Value {
-    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
-    serde_json::from_str(&text).expect("summary.json is JSON")
-}
-
-/// Rows of `history.csv` after its header.
-fn history_rows(out: &Path) -> usize {
-    std::fs::read_to_string(out.join("history.csv"))
-        .expect("history.csv")
-        .lines()
-        .count()
-        - 1
-}
-
 /// `fields/` replaced by a file while the run writes its frames: the run
 /// exits 1 and its summary says "failed", names the frame it could not
 /// write and counts the steps the history holds. (Running as root, a
@@ -62,25 +50,9 @@ fn a_frame_that_cannot_be_written_is_in_the_summary() {
     let dir = scratch("why-frame");
     let scenario = scenario(&dir, 1_000_000);
     let out = dir.join("out");
-    let child = Command::new(DRAPE)
-        .arg("run")
-        .arg(&scenario)
-        .arg("--out")
-        .arg(&out)
-        .arg("--quiet")
-        .stdin(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn drape");
+    let child = spawn_run(&scenario, &out);
     // Wait for a few steps, then take the frames' folder away.
-    let start = Instant::now();
-    while std::fs::read_to_string(out.join("history.csv")).map_or(0, |t| t.lines().count()) < 20 {
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "the run did not start"
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    }
+    wait_for_history(&out, 20);
     std::fs::rename(out.join("fields"), dir.join("fields.moved")).unwrap();
     std::fs::write(out.join("fields"), "not a folder").unwrap();
     let o = child.wait_with_output().expect("wait for drape");
@@ -99,6 +71,100 @@ fn a_frame_that_cannot_be_written_is_in_the_summary() {
     assert_eq!(
         s["steps"].as_u64().unwrap() as usize + 1,
         history_rows(&out)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The rows of `history.csv` after its header, as numbers by column name.
+fn history_table(out: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(out.join("history.csv")).expect("history.csv");
+    let mut lines = text.lines();
+    let columns = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    (columns, rows)
+}
+
+/// The number of the top-level `key` in a summary's text, parsed by Rust:
+/// serde_json's own float parsing (without its `float_roundtrip` feature)
+/// may be one unit in the last place off.
+fn number(summary: &str, key: &str) -> f64 {
+    let at = summary.find(&format!("\"{key}\": ")).expect(key) + key.len() + 4;
+    let rest = &summary[at..];
+    rest[..rest.find([',', '\n']).unwrap()].parse().unwrap()
+}
+
+/// A history row that cannot be written (here: the file would pass the
+/// process's file-size limit, `RLIMIT_FSIZE`, with `SIGXFSZ` ignored, so
+/// the write fails with "File too large" as on a full disk): the run exits
+/// 1 and its summary says "failed", names the history, counts the rows the
+/// history holds — the step whose row failed is not counted — and reports
+/// the last row's time and energies; the part of the row that was written
+/// is cut off again.
+#[cfg(unix)]
+#[test]
+fn a_history_row_that_cannot_be_written_is_in_the_summary() {
+    use std::os::unix::process::CommandExt;
+    let dir = scratch("why-history");
+    // A frame only at the start (and the end): the history is the file
+    // that grows, about 300 bytes a row.
+    let scenario = falling_plate(&dir, 1000, "[output]\nevery = 100000");
+    let out = dir.join("out");
+    const LIMIT: libc::rlim_t = 16 * 1024;
+    let mut command = Command::new(DRAPE);
+    command
+        .arg("run")
+        .arg(&scenario)
+        .arg("--out")
+        .arg(&out)
+        .arg("--quiet")
+        .stdin(Stdio::null());
+    // SAFETY: between fork and exec the closure only calls signal(2) and
+    // setrlimit(2), which are async-signal-safe.
+    unsafe {
+        command.pre_exec(|| {
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            let limit = libc::rlimit {
+                rlim_cur: LIMIT,
+                rlim_max: LIMIT,
+            };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &limit) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let o = command.output().expect("spawn drape");
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    let s = summary(&out);
+    assert_eq!(s["status"], "failed", "{s}");
+    let message = s["message"].as_str().unwrap();
+    assert!(message.contains("history.csv"), "{message}");
+    assert!(message.contains("File too large"), "{message}");
+    let bytes = std::fs::read(out.join("history.csv")).unwrap();
+    assert!(
+        bytes.len() as u64 <= LIMIT && bytes.ends_with(b"\n"),
+        "the history ends in part of a row"
+    );
+    let (columns, rows) = history_table(&out);
+    assert!(rows.len() > 10 && rows.len() < 1001, "{} rows", rows.len());
+    // The summary describes the history's last row: its step, its time
+    // and its energies, to the last bit.
+    assert_eq!(s["steps"].as_u64().unwrap() as usize + 1, rows.len());
+    let last = rows.last().unwrap();
+    let column = |name: &str| last[columns.iter().position(|c| c == name).unwrap()];
+    assert_eq!(column("step"), s["steps"].as_f64().unwrap());
+    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    for key in ["time", "kinetic_energy", "strain_energy", "external_work"] {
+        assert_eq!(number(&text, key), column(key), "{key}");
+    }
+    assert_eq!(
+        s["newton_iterations"].as_f64().unwrap(),
+        rows.iter()
+            .map(|r| r[columns.iter().position(|c| c == "iterations").unwrap()])
+            .sum::<f64>()
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

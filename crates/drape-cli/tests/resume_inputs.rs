@@ -125,9 +125,11 @@ fn a_changed_or_missing_mesh_file_refuses_the_resume() {
     assert_eq!(s["status"], "failed", "{s}");
     let message = s["message"].as_str().unwrap();
     assert!(
-        message.starts_with("cannot resume") && message.contains(&named),
+        message.starts_with("cannot resume: ") && message.contains(&named),
         "{message}"
     );
+    // Said once (the summary said "cannot resume: cannot resume: ...").
+    assert_eq!(message.matches("cannot resume").count(), 1, "{message}");
 
     std::fs::remove_file(&mesh).unwrap();
     let o = drape(&[Path::new("--resume"), &out]);

@@ -38,15 +38,22 @@ const SIGNAL_INTERVAL: Duration = Duration::from_millis(50);
 ///     out: the output directory; default ``out/<scenario stem>`` for a
 ///         file (as the command line), required for a dict.
 ///     resume: continue the interrupted run in ``out`` from its checkpoint
-///         (the same scenario and input files), as ``drape run --resume``.
+///         (the same scenario and input files), as ``drape run --resume``;
+///         a refused resume is recorded in ``out/summary.json`` (status
+///         ``"failed"``, the message), as the command line records it.
 ///
 /// Returns:
 ///     RunResult: the summary, the history and the frames written in ``out``.
 ///
 /// Raises:
 ///     ScenarioError: the scenario is invalid (with its file, key and line).
-///     RunError: the run failed (``result`` holds what it wrote up to then).
-///     OutputError: ``out`` is in use by another run or holds other files.
+///     RunError: the run failed (``result`` holds what it wrote up to then),
+///         or a resume was refused: an input file or the scenario changed
+///         since the checkpoint, or the checkpoint cannot be used (the
+///         message starts "cannot resume"; ``result`` holds the directory,
+///         whose summary says why).
+///     OutputError: ``out`` is in use by another run or holds other files;
+///         with ``resume``, ``out`` is not the directory of a run.
 ///     KeyboardInterrupt: Ctrl-C; the run finished its step and wrote a
 ///         checkpoint and its summary (status ``"interrupted"``) first.
 ///         (Python handles signals on its main thread: a run on another
@@ -69,15 +76,36 @@ pub fn run(
             ));
         }
     };
-    if resume {
+    let from_dict = matches!(source, Source::Dict(_));
+    let (lock, loaded) = if resume {
+        // As the command line: the directory (which must hold a run) is
+        // held before anything is read, and a refusal from then on is
+        // recorded in its summary.
+        let lock =
+            directory::lock_resume(&out).map_err(|e| output_error(py, e.to_string(), &out))?;
         // A changed or missing input file is named as such, before the
-        // scenario reads it (as the command line does).
-        simulation::check_resume_inputs(&out).map_err(|e| run_error(py, e.to_string(), &out))?;
-    }
-    let loaded = py
-        .detach(|| source.load())
-        .map_err(|e| scenario_error(py, &e, matches!(source, Source::Dict(_))))?;
-    let lock = directory::lock(&out).map_err(|e| output_error(py, e.to_string(), &out))?;
+        // scenario reads it.
+        if let Err(e) = simulation::check_resume_inputs(&out) {
+            let RunError::Resume(why) = &e else {
+                return Err(run_error(py, e.to_string(), &out));
+            };
+            let message = refused(&out, why);
+            return Err(run_error(py, message, &out));
+        }
+        match py.detach(|| source.load()) {
+            Ok(loaded) => (lock, loaded),
+            Err(e) => {
+                refused(&out, &e);
+                return Err(scenario_error(py, &e, from_dict));
+            }
+        }
+    } else {
+        let loaded = py
+            .detach(|| source.load())
+            .map_err(|e| scenario_error(py, &e, from_dict))?;
+        let lock = directory::lock(&out).map_err(|e| output_error(py, e.to_string(), &out))?;
+        (lock, loaded)
+    };
     if !resume {
         let scenario_file = match &source {
             Source::File(path) => Some(path.as_path()),
@@ -136,6 +164,18 @@ pub fn run(
         }
         Err(e) => Err(run_error(py, e.to_string(), &out)),
     }
+}
+
+/// Records a resume refused for `why` in `out/summary.json`, as the
+/// command line does ([`simulation::record_refused_resume`]), and returns
+/// the message (which says so if the summary could not be written).
+fn refused(out: &Path, why: &dyn std::fmt::Display) -> String {
+    simulation::record_refused_resume(out, why).unwrap_or_else(|e| {
+        format!(
+            "cannot resume: {why}; and {} could not be written: {e}",
+            out.join("summary.json").display()
+        )
+    })
 }
 
 /// Validates a scenario and builds its model without running it, as

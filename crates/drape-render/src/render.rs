@@ -484,18 +484,10 @@ impl Scene {
         for &i in &indices {
             let entry = out.frames[i].clone();
             let frame = read_vtu(&entry.path)?;
-            // Nothing can be drawn where a point has no position: a blank
-            // image would say the fabric is not there.
-            if let Some((k, p)) =
-                (frame.points.iter().enumerate()).find(|(_, p)| !p.iter().all(|x| x.is_finite()))
-            {
-                return Err(RenderError::Format {
-                    path: entry.path.clone(),
-                    message: format!(
-                        "point {k} (0-based) has no finite position ({p:?}): the frame cannot be drawn"
-                    ),
-                });
-            }
+            // Nothing can be drawn where a point has no position (a blank
+            // image would say the fabric is not there), nor coloured by a
+            // value that is not a number.
+            frame.check_finite()?;
             let values = opts.field.extract(&frame)?;
             // Frames of one run share their mesh: split it once.
             let (tris, cells) = match frames.last() {

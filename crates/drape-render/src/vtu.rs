@@ -75,6 +75,50 @@ impl Frame {
     pub fn cell_array(&self, name: &str) -> Option<&Array> {
         self.cell_data.iter().find(|a| a.name == name)
     }
+
+    /// Refuses a frame that holds a value that is not finite — a point's
+    /// position, or a value of a point array (`displacement`, `velocity`,
+    /// ...) or a cell array (`stress`, ...) — naming the file, the array and
+    /// the first node or cell. drape writes finite values only (a state
+    /// that is not finite is never recorded), so such a frame is damaged;
+    /// drawn, it would be blank or coloured on a scale of NaN, and measured,
+    /// meaningless.
+    ///
+    /// # Errors
+    /// [`RenderError::Format`] for the first value that is not finite.
+    pub fn check_finite(&self) -> Result<()> {
+        let damaged = |what: String| {
+            Err(RenderError::format(
+                &self.path,
+                format!("{what}; drape writes finite values only, so the frame is damaged"),
+            ))
+        };
+        if let Some((k, p)) =
+            (self.points.iter().enumerate()).find(|(_, p)| !p.iter().all(|x| x.is_finite()))
+        {
+            return damaged(format!(
+                "point {k} (0-based) has no finite position ({p:?})"
+            ));
+        }
+        for (kind, item, arrays) in [
+            ("point", "node", &self.point_data),
+            ("cell", "cell", &self.cell_data),
+        ] {
+            for a in arrays {
+                if let Some(i) = a.values.iter().position(|v| !v.is_finite()) {
+                    let c = a.components.max(1);
+                    return damaged(format!(
+                        "the {kind} array {:?} holds {} at {item} {} (0-based), component {}",
+                        a.name,
+                        a.values[i],
+                        i / c,
+                        i % c
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Reads the frame at `path`.
@@ -518,6 +562,50 @@ mod tests {
         assert_eq!(a[0], ("type", "Float64".to_owned()));
         assert_eq!(a[1], ("Name", "a&b".to_owned()));
         assert_eq!(a[2], ("offset", "12".to_owned()));
+    }
+
+    /// The first value that is not finite is named by its array, its node
+    /// or cell and its component; positions come first, then point arrays,
+    /// then cell arrays.
+    #[test]
+    fn check_finite_names_the_first_value_that_is_not() {
+        let array = |name: &str, values: Vec<f64>| Array {
+            name: name.into(),
+            components: 3,
+            values,
+        };
+        let mut frame = Frame {
+            path: "f.vtu".into(),
+            time: None,
+            points: vec![[0.0; 3]; 3],
+            connectivity: vec![0, 1, 2],
+            offsets: vec![0, 3],
+            types: vec![VTK_TRIANGLE],
+            point_data: vec![array("velocity", vec![0.0; 9])],
+            cell_data: vec![array("stress", vec![0.0; 3])],
+        };
+        assert!(frame.check_finite().is_ok());
+        frame.cell_data[0].values[1] = f64::NAN;
+        let e = frame.check_finite().unwrap_err().to_string();
+        assert!(
+            e.starts_with(
+                "f.vtu: the cell array \"stress\" holds NaN at cell 0 (0-based), component 1"
+            ),
+            "{e}"
+        );
+        frame.point_data[0].values[7] = f64::INFINITY;
+        let e = frame.check_finite().unwrap_err().to_string();
+        assert!(
+            e.contains("point array \"velocity\" holds inf at node 2 (0-based), component 1"),
+            "{e}"
+        );
+        frame.points[1][2] = f64::NAN;
+        let e = frame.check_finite().unwrap_err().to_string();
+        assert!(
+            e.contains("point 1 (0-based) has no finite position"),
+            "{e}"
+        );
+        assert!(e.ends_with("the frame is damaged"), "{e}");
     }
 
     #[test]

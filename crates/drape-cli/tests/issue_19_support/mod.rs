@@ -4,7 +4,8 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 pub const DRAPE: &str = env!("CARGO_BIN_EXE_drape");
 
@@ -69,4 +70,57 @@ pub fn run_into(scenario: &Path, out: &Path) -> Output {
         out.as_os_str(),
         "--quiet".as_ref(),
     ])
+}
+
+/// `drape run SCENARIO --out OUT --quiet` started, its standard error
+/// piped.
+pub fn spawn_run(scenario: &Path, out: &Path) -> Child {
+    Command::new(DRAPE)
+        .arg("run")
+        .arg(scenario)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .stdin(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn drape")
+}
+
+/// Waits (at most a minute) until `out/history.csv` has `lines` lines.
+pub fn wait_for_history(out: &Path, lines: usize) {
+    let start = Instant::now();
+    while std::fs::read_to_string(out.join("history.csv")).map_or(0, |t| t.lines().count()) < lines
+    {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "the run did not start"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// Sends `signal` (`"TERM"`, `"INT"`, ...) to `child` with `kill`.
+pub fn send(child: &Child, signal: &str) {
+    let sent = Command::new("kill")
+        .arg(format!("-{signal}"))
+        .arg(child.id().to_string())
+        .status()
+        .expect("kill");
+    assert!(sent.success());
+}
+
+/// `out/summary.json`.
+pub fn summary(out: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+    serde_json::from_str(&text).expect("summary.json is JSON")
+}
+
+/// Rows of `out/history.csv` after its header.
+pub fn history_rows(out: &Path) -> usize {
+    std::fs::read_to_string(out.join("history.csv"))
+        .expect("history.csv")
+        .lines()
+        .count()
+        - 1
 }

@@ -51,9 +51,12 @@ def run(
     ``drape run`` does, with the GIL released.
 
     ``resume=True`` continues the interrupted run in ``out`` from its
-    checkpoint. Raises ScenarioError (invalid scenario), RunError (the run
-    failed; ``.result`` holds its outputs), OutputError (``out`` unusable),
-    KeyboardInterrupt (Ctrl-C, after a checkpoint and the summary).
+    checkpoint; a refused resume is recorded in ``out/summary.json`` as
+    ``drape run --resume`` records it. Raises ScenarioError (invalid
+    scenario), RunError (the run failed, or a resume was refused: "cannot
+    resume: ..."; ``.result`` holds its outputs), OutputError (``out``
+    unusable; with ``resume``, not a run's directory), KeyboardInterrupt
+    (Ctrl-C, after a checkpoint and the summary).
     """
 
 def check(scenario: Scenario) -> Dict[str, Any]:

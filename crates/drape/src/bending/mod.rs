@@ -181,34 +181,21 @@ pub fn triangulate(mesh: &Mesh) -> (Vec<[usize; 3]>, Vec<usize>) {
     (triangles, owner)
 }
 
-/// The bending term of a mesh: one patch per (sub-)triangle, with where
-/// its Hessian blocks lie in the pattern.
-#[derive(Debug, Clone)]
-pub struct Bending {
-    /// The constitutive law it was built with.
-    pub rigidity: BendingRigidity,
-    patches: Vec<Patch>,
-    /// Stencils (the patches' nodes) in CSR form.
-    ptr: Vec<usize>,
-    nodes: Vec<usize>,
-    /// Per patch, its `len^2` Hessian block bases
-    /// ([`SparsePattern::block_layout`]), row-major in (k, l), set by
-    /// [`Bending::attach`].
-    blocks: Vec<usize>,
-    /// Where each patch's blocks start in `blocks`.
-    block_start: Vec<usize>,
-    /// Patch lists that share no node, for the parallel assembly (empty:
-    /// serial, in patch order).
-    colours: Vec<Vec<usize>>,
+/// The (sub-)triangles of a mesh ([`triangulate`]) and, for each, the
+/// node opposite each of its edges across the neighbouring triangle.
+struct Neighbours {
+    triangles: Vec<[usize; 3]>,
+    /// The element of each triangle.
+    owner: Vec<usize>,
+    /// `opposite[t][m]`: the node opposite the edge of triangle `t` that
+    /// is opposite its vertex `m`, `None` on a boundary.
+    opposite: Vec<[Option<usize>; 3]>,
 }
 
-/// Patches per parallel task: enough work to outweigh a task's hand-off.
-const CHUNK: usize = 256;
-
-impl Bending {
-    /// The patches of `mesh` for `rigidity`, fitted on the mesh's
-    /// (reference) positions.
-    pub fn new(mesh: &Mesh, rigidity: BendingRigidity) -> Result<Self, BendingError> {
+impl Neighbours {
+    /// The neighbours of `mesh`'s triangles; an edge of more than two
+    /// triangles is refused.
+    fn of(mesh: &Mesh) -> Result<Self, BendingError> {
         let (triangles, owner) = triangulate(mesh);
         let mut edges: std::collections::HashMap<(usize, usize), Vec<(usize, usize)>> =
             std::collections::HashMap::with_capacity(3 * triangles.len() / 2 + 1);
@@ -237,6 +224,71 @@ impl Bending {
                 }
             }
         }
+        Ok(Self {
+            triangles,
+            owner,
+            opposite,
+        })
+    }
+}
+
+/// The stencils the bending patches of `mesh` have, in CSR form `(ptr,
+/// nodes)`: each (sub-)triangle's three nodes and the nodes opposite its
+/// edges, for the triangles with a neighbour (a lone triangle cannot
+/// bend) — the node sets of [`Bending::stencils`], found from the mesh's
+/// topology alone, without fitting the patches: what the Hessian's
+/// pattern must hold, known before the model is built.
+///
+/// # Errors
+/// [`BendingError::NonManifold`], as [`Bending::new`].
+pub fn stencils_of(mesh: &Mesh) -> Result<(Vec<usize>, Vec<usize>), BendingError> {
+    let n = Neighbours::of(mesh)?;
+    let mut ptr = vec![0];
+    let mut nodes = Vec::new();
+    for (tri, opposite) in n.triangles.iter().zip(&n.opposite) {
+        if opposite.iter().all(Option::is_none) {
+            continue;
+        }
+        nodes.extend_from_slice(tri);
+        nodes.extend(opposite.iter().flatten());
+        ptr.push(nodes.len());
+    }
+    Ok((ptr, nodes))
+}
+
+/// The bending term of a mesh: one patch per (sub-)triangle, with where
+/// its Hessian blocks lie in the pattern.
+#[derive(Debug, Clone)]
+pub struct Bending {
+    /// The constitutive law it was built with.
+    pub rigidity: BendingRigidity,
+    patches: Vec<Patch>,
+    /// Stencils (the patches' nodes) in CSR form.
+    ptr: Vec<usize>,
+    nodes: Vec<usize>,
+    /// Per patch, its `len^2` Hessian block bases
+    /// ([`SparsePattern::block_layout`]), row-major in (k, l), set by
+    /// [`Bending::attach`].
+    blocks: Vec<usize>,
+    /// Where each patch's blocks start in `blocks`.
+    block_start: Vec<usize>,
+    /// Patch lists that share no node, for the parallel assembly (empty:
+    /// serial, in patch order).
+    colours: Vec<Vec<usize>>,
+}
+
+/// Patches per parallel task: enough work to outweigh a task's hand-off.
+const CHUNK: usize = 256;
+
+impl Bending {
+    /// The patches of `mesh` for `rigidity`, fitted on the mesh's
+    /// (reference) positions.
+    pub fn new(mesh: &Mesh, rigidity: BendingRigidity) -> Result<Self, BendingError> {
+        let Neighbours {
+            triangles,
+            owner,
+            opposite,
+        } = Neighbours::of(mesh)?;
         let d = rigidity.matrix();
         let axis = rigidity.axis();
         let mut patches = Vec::with_capacity(triangles.len());
@@ -417,6 +469,31 @@ mod tests {
     use super::*;
     use crate::mesh::ElementOrder;
     use crate::mesh::generate::{Pattern, rectangle};
+
+    /// The stencils found from the topology alone are the patches' own,
+    /// in order, for every element order (node sets: the order inside a
+    /// stencil may differ).
+    #[test]
+    fn stencils_of_are_the_patches_stencils() {
+        for order in [
+            ElementOrder::Linear,
+            ElementOrder::Quadratic,
+            ElementOrder::Cubic,
+        ] {
+            let mesh = rectangle([0.2, 0.1], [6, 3], Pattern::Alternate, [0.0; 3], order);
+            let bending = Bending::new(&mesh, BendingRigidity::Isotropic(2e-5)).unwrap();
+            let (ptr, nodes) = stencils_of(&mesh).unwrap();
+            let sorted = |s: &[usize]| {
+                let mut v = s.to_vec();
+                v.sort_unstable();
+                v
+            };
+            let found: Vec<Vec<usize>> =
+                ptr.windows(2).map(|w| sorted(&nodes[w[0]..w[1]])).collect();
+            let fitted: Vec<Vec<usize>> = bending.stencils().map(sorted).collect();
+            assert_eq!(found, fitted, "{order:?}");
+        }
+    }
 
     /// The parallel assembly (colours, chunks) adds the same gradient and
     /// Hessian as the serial one, to round-off (the order of the sums

@@ -26,6 +26,15 @@ mod validate;
 pub use read_error::{Location, MeshReadError};
 pub use validate::MeshError;
 
+/// Most nodes a mesh may have, generated or read: a guard against typos
+/// such as `divisions = [20000, 20000]` and against files too large to
+/// run, whose model would exhaust memory. The generators are refused from
+/// their counts before they generate, the readers from the count a Gmsh
+/// file declares before its nodes are read, and an OBJ file's at the
+/// vertex past it ([`gmsh::parse_msh_at_most`], [`obj::parse_obj_at_most`]
+/// take another cap).
+pub const MAX_MESH_NODES: usize = 3_000_000;
+
 /// Lagrange order of the triangles of a mesh.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum ElementOrder {

@@ -9,7 +9,8 @@
 //!
 //! * `v x y z` vertices, with an optional `w` (the coordinates are divided by
 //!   it) or vertex colour `r g b` (ignored). A vertex with a NaN or infinite
-//!   coordinate is an error, even if no face uses it.
+//!   coordinate is an error, even if no face uses it, and so is a vertex
+//!   past [`MAX_MESH_NODES`] (or the cap given to [`parse_obj_at_most`]).
 //! * `f` faces, `v`, `v/vt`, `v//vn` or `v/vt/vn` per corner, with absolute
 //!   (1-based) or relative (negative) vertex indices. A face with more than
 //!   three corners is cut into triangles by ear clipping
@@ -47,7 +48,7 @@
 
 use std::path::Path;
 
-use super::{ElementOrder, Mesh};
+use super::{ElementOrder, MAX_MESH_NODES, Mesh};
 
 pub use super::{Location, MeshReadError};
 
@@ -61,12 +62,24 @@ pub fn read_obj(path: &Path) -> Result<Mesh, MeshReadError> {
 }
 
 /// Parses the bytes of a Wavefront OBJ file into a linear triangle
-/// [`Mesh`]; `source` is the file name used in error messages.
+/// [`Mesh`]; `source` is the file name used in error messages. A file of
+/// more than [`MAX_MESH_NODES`] vertices is refused at the first vertex
+/// past it ([`MeshReadError::TooManyNodes`]).
 ///
 /// All objects and groups are merged; faces with more than three corners
 /// are split into triangle fans. See the [module documentation](self).
 pub fn parse_obj(bytes: &[u8], source: &str) -> Result<Mesh, MeshReadError> {
-    let clean = normalize(bytes, source)?;
+    parse_obj_at_most(bytes, source, MAX_MESH_NODES)
+}
+
+/// [`parse_obj`] with a cap of `max_nodes` vertices, refused at the line
+/// of the first vertex past it.
+pub fn parse_obj_at_most(
+    bytes: &[u8],
+    source: &str,
+    max_nodes: usize,
+) -> Result<Mesh, MeshReadError> {
+    let clean = normalize(bytes, source, max_nodes)?;
     // `..Default::default()` covers the fields that `tobj`'s optional
     // features (`merging`, `reordering`) add, should another crate enable them.
     #[allow(clippy::needless_update)]
@@ -163,7 +176,7 @@ fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, Vec<&[u8]>)> {
 
 /// Checks the file and rewrites it for `tobj` as plain `v x y z [w]` and
 /// `f i j k ...` lines (absolute 1-based indices), dropping everything else.
-fn normalize(bytes: &[u8], file: &str) -> Result<Vec<u8>, MeshReadError> {
+fn normalize(bytes: &[u8], file: &str, max_nodes: usize) -> Result<Vec<u8>, MeshReadError> {
     let syntax = |line: usize, message: String| MeshReadError::Syntax {
         file: file.to_owned(),
         at: Some(Location::Line(line)),
@@ -192,6 +205,15 @@ fn normalize(bytes: &[u8], file: &str) -> Result<Vec<u8>, MeshReadError> {
             continue;
         };
         vertices += 1;
+        if !usize::try_from(vertices).is_ok_and(|n| n <= max_nodes) {
+            return Err(MeshReadError::TooManyNodes {
+                file: file.to_owned(),
+                at: Some(Location::Line(line)),
+                count: vertices,
+                declared: false,
+                limit: max_nodes,
+            });
+        }
         let (xyz, w) = match values {
             [x, y, z] | [x, y, z, _, _, _] => ([*x, *y, *z], None),
             [x, y, z, w] => ([*x, *y, *z], Some(*w)),
@@ -363,6 +385,21 @@ mod tests {
 
     fn parse(text: &str) -> Result<Mesh, MeshReadError> {
         parse_obj(text.as_bytes(), "test.obj")
+    }
+
+    /// The cap on nodes, given small: a file of up to that many vertices
+    /// is read, the first vertex past it is refused at its line.
+    #[test]
+    fn a_vertex_past_the_cap_is_refused_at_its_line() {
+        let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\n# more\nv 0 1 0\nf 1 2 3 4\n";
+        let m = parse_obj_at_most(text.as_bytes(), "cap.obj", 4).unwrap();
+        assert_eq!(m.node_count(), 4);
+        let err = parse_obj_at_most(text.as_bytes(), "cap.obj", 3).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "cap.obj, line 5: vertex 4, more than the 3 nodes a mesh may have; use a coarser mesh"
+        );
+        assert_eq!(err.location(), Some(Location::Line(5)));
     }
 
     #[test]

@@ -163,6 +163,32 @@ pub enum MeshReadError {
         /// The incomplete section, e.g. `$Nodes`.
         section: String,
     },
+    /// The file holds more nodes than a mesh may have
+    /// ([`MAX_MESH_NODES`](super::MAX_MESH_NODES), or the reader's cap):
+    /// refused from the count a Gmsh file declares, before its nodes are
+    /// read, or at an OBJ file's first vertex past the cap.
+    #[error(
+        "{file}{}: {}, more than the {limit} nodes a mesh may have; use a coarser mesh",
+        suffix(.at),
+        if *.declared {
+            format!("$Nodes declares {count} nodes")
+        } else {
+            format!("vertex {count}")
+        }
+    )]
+    TooManyNodes {
+        /// File name.
+        file: String,
+        /// Where the count (Gmsh) or the vertex (OBJ) was found.
+        at: Option<Location>,
+        /// The number of nodes the file declares (Gmsh), or the number of
+        /// the first vertex past the cap (OBJ).
+        count: u64,
+        /// Whether `count` is the number the file declares.
+        declared: bool,
+        /// The cap.
+        limit: usize,
+    },
     /// The OBJ parser (`tobj`) rejected the file.
     #[error("{file}: invalid OBJ data: {source}")]
     Obj {
@@ -186,6 +212,7 @@ impl MeshReadError {
             | Self::UnsupportedElement { file, .. }
             | Self::NoTriangles { file }
             | Self::Truncated { file, .. }
+            | Self::TooManyNodes { file, .. }
             | Self::Obj { file, .. } => file,
         }
     }
@@ -198,7 +225,8 @@ impl MeshReadError {
             | Self::UnknownNode { at, .. }
             | Self::NonFiniteCoordinate { at, .. }
             | Self::MixedOrders { at, .. }
-            | Self::UnsupportedElement { at, .. } => *at,
+            | Self::UnsupportedElement { at, .. }
+            | Self::TooManyNodes { at, .. } => *at,
             _ => None,
         }
     }

@@ -63,6 +63,15 @@ pub enum DirectoryError {
         /// What was found (at most a few names).
         entries: Vec<String>,
     },
+    /// A resume's directory that is missing, not a directory, or holds no
+    /// run; nothing was created or written.
+    #[error("cannot resume in {dir}: {what}; name the output directory of a drape run")]
+    NotARun {
+        /// The directory.
+        dir: PathBuf,
+        /// What it is instead.
+        what: &'static str,
+    },
     /// It is not a directory, or cannot be created, read or locked.
     #[error("cannot use {path} as the output directory: {error}")]
     Io {
@@ -132,6 +141,37 @@ pub fn lock(dir: &Path) -> Result<OutputLock, DirectoryError> {
         _file: file,
         was_drapes,
     })
+}
+
+/// The files of which one marks a directory as holding a run, for a
+/// resume: the checkpoint, the summary, the scenario's path.
+pub const RUN_FILES: [&str; 3] = ["checkpoint.bin", "summary.json", "scenario.path"];
+
+/// Takes the lock of the directory a resume continues in, which must exist
+/// and hold a run (one of [`RUN_FILES`]): nothing is created in a
+/// directory that does not. A resume holds its directory before it reads
+/// anything, so that a refusal can be recorded in the summary without
+/// racing another writer.
+pub fn lock_resume(dir: &Path) -> Result<OutputLock, DirectoryError> {
+    let not_a_run = |what| {
+        Err(DirectoryError::NotARun {
+            dir: dir.to_path_buf(),
+            what,
+        })
+    };
+    if !dir.is_dir() {
+        return not_a_run(if dir.exists() {
+            "not a directory"
+        } else {
+            "no such directory"
+        });
+    }
+    if !RUN_FILES.iter().any(|f| dir.join(f).is_file()) {
+        return not_a_run(
+            "it holds no drape run (no checkpoint.bin, summary.json or scenario.path)",
+        );
+    }
+    lock(dir)
 }
 
 /// Whether `name` (an entry of `fields/`) is a frame drape writes.
@@ -239,6 +279,41 @@ mod tests {
         }
         drop(held);
         lock(&dir).expect("free again");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A resume's directory must be there and hold a run: refused
+    /// otherwise with nothing created; taken (its lock) when it does.
+    #[test]
+    fn a_resume_needs_a_directory_holding_a_run() {
+        let dir = scratch("resume");
+        for (setup, said) in [
+            (None, "no such directory"),
+            (Some(false), "not a directory"),
+            (Some(true), "holds no drape run"),
+        ] {
+            let _ = std::fs::remove_dir_all(&dir);
+            let _ = std::fs::remove_file(&dir);
+            match setup {
+                Some(true) => std::fs::create_dir_all(&dir).unwrap(),
+                Some(false) => std::fs::write(&dir, "a file").unwrap(),
+                None => {}
+            }
+            match lock_resume(&dir) {
+                Err(e @ DirectoryError::NotARun { .. }) => {
+                    assert!(e.to_string().contains(said), "{e}")
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "created");
+        std::fs::write(dir.join("summary.json"), "{}").unwrap();
+        let held = lock_resume(&dir).expect("a run");
+        assert!(matches!(
+            lock_resume(&dir),
+            Err(DirectoryError::Busy { .. })
+        ));
+        drop(held);
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -4,13 +4,15 @@
 //! [`super::atomic::write_atomic`]); after that the file is opened in append
 //! mode and every row is written as one complete line and flushed at once, so
 //! that after a crash the file holds the header and every row written before
-//! it. Readers can follow the file while the run goes on.
+//! it. A row that cannot be written whole (a full disk, a file-size limit)
+//! is cut off again, so that the file never ends in part of a row.
+//! Readers can follow the file while the run goes on.
 //!
 //! Values are formatted with [`format_f64`], which reads back exactly with any
 //! correct float parser (Rust's `str::parse::<f64>`, Python's `float`, pandas).
 
 use std::fs::{File, OpenOptions};
-use std::io::{self, BufWriter, Read, Seek, SeekFrom, Write};
+use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use super::atomic::write_atomic;
@@ -41,7 +43,11 @@ pub fn format_f64(v: f64) -> String {
 pub struct HistoryWriter {
     path: PathBuf,
     columns: Vec<String>,
-    writer: BufWriter<File>,
+    /// The file, appended to one whole line at a time (no buffer: each row
+    /// goes to the operating system as it is written).
+    file: File,
+    /// The file's length after the last complete row.
+    len: u64,
     line: String,
 }
 
@@ -164,10 +170,12 @@ impl HistoryWriter {
     /// Opens `path` in append mode for rows.
     fn open(path: &Path, columns: &[String]) -> io::Result<Self> {
         let file = OpenOptions::new().append(true).open(path)?;
+        let len = file.metadata()?.len();
         Ok(Self {
             path: path.to_path_buf(),
             columns: columns.to_vec(),
-            writer: BufWriter::new(file),
+            file,
+            len,
             line: String::new(),
         })
     }
@@ -176,7 +184,9 @@ impl HistoryWriter {
     ///
     /// # Errors
     /// `InvalidInput` (and nothing written) if `values.len()` differs from the
-    /// number of columns; otherwise any I/O error.
+    /// number of columns; otherwise any I/O error, after which the part of
+    /// the row that was written is cut off again (as far as the file lets
+    /// itself be truncated): the file ends with the last complete row.
     pub fn write_row(&mut self, values: &[f64]) -> io::Result<()> {
         if values.len() != self.columns.len() {
             return Err(io::Error::new(
@@ -197,8 +207,17 @@ impl HistoryWriter {
             self.line.push_str(&format_f64(v));
         }
         self.line.push('\n');
-        self.writer.write_all(self.line.as_bytes())?;
-        self.writer.flush()
+        match self.file.write_all(self.line.as_bytes()) {
+            Ok(()) => {
+                self.len += self.line.len() as u64;
+                Ok(())
+            }
+            Err(e) => {
+                // Best effort: the write's own error is the one to report.
+                let _ = self.file.set_len(self.len);
+                Err(e)
+            }
+        }
     }
 
     /// Column names, in file order.

@@ -10,17 +10,11 @@ use super::{
 use crate::bending::BendingError;
 use crate::integrator::Newmark;
 use crate::load::{Load, LoadKind};
-use crate::mesh::{ElementOrder, Mesh, generate};
+use crate::mesh::{ElementOrder, MAX_MESH_NODES, Mesh, generate};
 use crate::model::{Model, ModelError};
 use crate::simulation::schedule::{AdaptiveSteps, RestCriterion};
 use crate::solver::NewtonSettings;
 use std::path::{Path, PathBuf};
-
-/// Most nodes a mesh may have (generated or read): a guard against typos such as
-/// `divisions = [20000, 20000]`, which would exhaust memory (a run needs
-/// about 1.6 kB per node with a direct solver; 3 million nodes, 6 million
-/// T3 elements, is ~5 GB).
-const MAX_GENERATED_NODES: usize = 3_000_000;
 
 /// The largest coordinate a mesh node may have (m): a fabric is not a
 /// continent, and beyond it the mesh's areas, masses and forces lose their
@@ -183,6 +177,7 @@ impl Scenario {
         }
         let monitors = build_monitors(&c, &mesh, &self.monitors)?;
         check_memory(&c, &self.mesh, mesh.node_count())?;
+        check_pattern_memory(&c, &self.mesh, &mesh, bending.is_some())?;
 
         let mut model = Model::new(
             mesh,
@@ -605,20 +600,8 @@ fn build_mesh(
         MeshShape::Disc => disc_mesh(c, spec, order, center)?,
         MeshShape::File => file_mesh(c, spec, order, base, inputs)?,
     };
-    // The generators are refused before they allocate; a file is read
-    // first (its readers bound their counts by the file's size).
-    if mesh.node_count() > MAX_GENERATED_NODES {
-        return Err(c.invalid(
-            "mesh",
-            None,
-            "path",
-            format!(
-                "{}: {} nodes, more than the limit {MAX_GENERATED_NODES} (a run needs about 1.6 kB a node)",
-                spec.path.as_deref().unwrap_or(Path::new("")).display(),
-                mesh.node_count()
-            ),
-        ));
-    }
+    // The generators are refused from their counts before they generate,
+    // a file by its reader before it reads more nodes than the cap.
     check_extent(c, spec, &mesh)?;
     mesh.validate().map_err(|e| ScenarioError::Mesh {
         file: c.file.to_path_buf(),
@@ -684,23 +667,93 @@ fn check_memory(c: &Checker, spec: &MeshSpec, nodes: usize) -> Result<(), Scenar
     if need <= have {
         return Ok(());
     }
-    let key = match spec.shape {
-        MeshShape::Rectangle => "divisions",
-        MeshShape::Disc => "rings",
-        MeshShape::File => "path",
-    };
-    let mb = |b: u64| b as f64 / 1e6;
     Err(c.invalid(
         "mesh",
         None,
-        key,
+        mesh_size_key(spec),
         format!(
             "{nodes} nodes need about {:.0} MB to run ({} bytes a node), more than the {:.0} MB {what}; use a coarser mesh or a larger machine",
-            mb(need),
+            megabytes(need),
             crate::memory::BYTES_PER_NODE,
-            mb(have)
+            megabytes(have)
         ),
     ))
+}
+
+/// The memory the Hessian's pattern needs ([`crate::memory::pattern_estimate`]
+/// of its blocks: the elements', and the bending patches' stencils with
+/// `bending`) against what the process may still allocate
+/// ([`crate::memory::headroom`]), before the model allocates it: over it,
+/// the mesh's key is refused with both figures. The pattern depends on the
+/// elements' order and on bending (its stencils reach the nodes opposite a
+/// triangle's edges), so it may not fit where the mesh's estimate did. A
+/// bound of the blocks (every stencil's square) passes most meshes at
+/// once; the exact count, which walks the mesh's topology, is made only
+/// when the bound does not fit. A mesh whose bending stencils cannot be
+/// found (a non-manifold edge) is left to the model, which says why.
+fn check_pattern_memory(
+    c: &Checker,
+    spec: &MeshSpec,
+    mesh: &Mesh,
+    bending: bool,
+) -> Result<(), ScenarioError> {
+    use crate::memory::{BYTES_PER_BLOCK, headroom, pattern_estimate};
+    let Some((have, what)) = headroom() else {
+        return Ok(());
+    };
+    let n = mesh.order.nodes_per_element();
+    let sub_triangles = mesh.element_count() * mesh.order.degree().pow(2);
+    let bound = mesh.node_count()
+        + mesh.element_count() * n * n
+        + usize::from(bending) * 36 * sub_triangles;
+    if pattern_estimate(bound) <= have {
+        return Ok(());
+    }
+    let nodes = mesh.node_count();
+    let blocks = if bending {
+        let Ok((ptr, stencil_nodes)) = crate::bending::stencils_of(mesh) else {
+            return Ok(());
+        };
+        let stencils = ptr.windows(2).map(|w| &stencil_nodes[w[0]..w[1]]);
+        crate::solver::pattern::block_count(nodes, mesh.elements().chain(stencils))
+    } else {
+        crate::solver::pattern::block_count(nodes, mesh.elements())
+    };
+    let need = pattern_estimate(blocks);
+    if need <= have {
+        return Ok(());
+    }
+    let stencils = if bending {
+        ", with bending's stencils"
+    } else {
+        ""
+    };
+    Err(c.invalid(
+        "mesh",
+        None,
+        mesh_size_key(spec),
+        format!(
+            "the Hessian's sparse pattern of these {nodes} nodes (order {}{stencils}) has {blocks} blocks of 3x3 and needs about {:.0} MB for its values and indices ({BYTES_PER_BLOCK} bytes a block, before the linear solver's factor), more than the {:.0} MB {what}; use a coarser mesh, a lower order or a larger machine",
+            mesh.order.degree(),
+            megabytes(need),
+            megabytes(have)
+        ),
+    ))
+}
+
+/// The `[mesh]` key that sets the mesh's size: `divisions`, `rings` or
+/// `path`.
+fn mesh_size_key(spec: &MeshSpec) -> &'static str {
+    match spec.shape {
+        MeshShape::Rectangle => "divisions",
+        MeshShape::Disc => "rings",
+        MeshShape::File => "path",
+    }
+}
+
+/// Bytes in MB (10^6), for messages.
+fn megabytes(bytes: u64) -> f64 {
+    bytes as f64 / 1e6
 }
 
 /// `[material]` moduli at most [`MAX_MODULUS`] (their positivity is
@@ -727,7 +780,7 @@ fn check_moduli(c: &Checker, m: &super::MaterialSpec) -> Result<(), ScenarioErro
 }
 
 /// `[mesh] shape = "rectangle"`: `size` and `divisions`, at most
-/// [`MAX_GENERATED_NODES`] nodes.
+/// [`MAX_MESH_NODES`] nodes.
 fn rectangle_mesh(
     c: &Checker,
     spec: &MeshSpec,
@@ -773,12 +826,12 @@ fn rectangle_mesh(
     }
     let nodes = (div[0].saturating_mul(p).saturating_add(1))
         .saturating_mul(div[1].saturating_mul(p).saturating_add(1));
-    if nodes > MAX_GENERATED_NODES {
+    if nodes > MAX_MESH_NODES {
         return Err(c.invalid(
             t,
             None,
             "divisions",
-            format!("{div:?} would make {nodes} nodes, more than the limit {MAX_GENERATED_NODES}"),
+            format!("{div:?} would make {nodes} nodes, more than the limit {MAX_MESH_NODES}"),
         ));
     }
     Ok(generate::rectangle(
@@ -791,7 +844,7 @@ fn rectangle_mesh(
 }
 
 /// `[mesh] shape = "disc"`: `radius` and `rings`, at most
-/// [`MAX_GENERATED_NODES`] nodes.
+/// [`MAX_MESH_NODES`] nodes.
 fn disc_mesh(
     c: &Checker,
     spec: &MeshSpec,
@@ -827,15 +880,15 @@ fn disc_mesh(
             .saturating_add(1)
     };
     let nodes = disc_nodes(rings);
-    if rings == 0 || nodes > MAX_GENERATED_NODES {
-        let mut most = ((MAX_GENERATED_NODES / (3 * p * p)) as f64).sqrt() as usize;
-        while disc_nodes(most) > MAX_GENERATED_NODES {
+    if rings == 0 || nodes > MAX_MESH_NODES {
+        let mut most = ((MAX_MESH_NODES / (3 * p * p)) as f64).sqrt() as usize;
+        while disc_nodes(most) > MAX_MESH_NODES {
             most -= 1;
         }
         let why = if rings == 0 {
             String::new()
         } else {
-            format!(" ({nodes} nodes, more than the limit {MAX_GENERATED_NODES})")
+            format!(" ({nodes} nodes, more than the limit {MAX_MESH_NODES})")
         };
         return Err(c.invalid(
             t,

@@ -271,6 +271,45 @@ struct History<'a> {
     setup: &'a Setup,
     writer: HistoryWriter,
     scratch: Vec<f64>,
+    /// The figures of the last row this session wrote: what the summary
+    /// reports, so that it describes the history on disk even when the
+    /// next row could not be written.
+    last: Option<Figures>,
+}
+
+/// The figures of a state that a history row and the summary report.
+#[derive(Debug, Clone, Default)]
+struct Figures {
+    /// Time (s), or load factor in statics.
+    time: f64,
+    kinetic: f64,
+    strain: f64,
+    external_work: f64,
+    /// Each monitor's position, in the scenario's order.
+    monitors: Vec<[f64; 3]>,
+}
+
+impl Figures {
+    /// Sets the figures of `state`, whose kinetic and strain energies are
+    /// `kinetic` and `strain`.
+    fn set(&mut self, setup: &Setup, state: &State, kinetic: f64, strain: f64) {
+        self.time = state.time;
+        self.kinetic = kinetic;
+        self.strain = strain;
+        self.external_work = state.external_work;
+        self.monitors.clear();
+        self.monitors.extend(setup.monitors.iter().map(|m| {
+            let p = &state.positions[3 * m.node..3 * m.node + 3];
+            [p[0], p[1], p[2]]
+        }));
+    }
+
+    /// The figures of `state` (see [`Figures::set`]).
+    fn of(setup: &Setup, state: &State, kinetic: f64, strain: f64) -> Self {
+        let mut figures = Self::default();
+        figures.set(setup, state, kinetic, strain);
+        figures
+    }
 }
 
 /// The history's column names, in order.
@@ -351,6 +390,9 @@ impl History<'_> {
         ]);
         let path = self.writer.path().to_path_buf();
         self.writer.write_row(&row).map_err(io_err(&path))?;
+        self.last
+            .get_or_insert_with(Figures::default)
+            .set(self.setup, state, kinetic, r.strain);
         Ok(kinetic)
     }
 }
@@ -486,17 +528,14 @@ pub fn record_failure(
             value
         }
         (None, Some(setup)) => {
-            let state = State::at_rest(&setup.model, setup.model.initial_positions());
             let s = summary(
                 setup,
-                &state,
+                &initial_figures(setup),
                 Some(message.to_owned()),
                 0,
                 0,
                 0,
                 Instant::now(),
-                0.0,
-                0.0,
             );
             serde_json::to_value(&s).unwrap_or_default()
         }
@@ -504,6 +543,22 @@ pub fn record_failure(
     };
     let text = serde_json::to_string_pretty(&json).unwrap_or_default();
     write_atomic(&path, text.as_bytes())
+}
+
+/// Records in `out/summary.json` that a resume was refused — after it took
+/// the directory's lock, before its loop — for `why` (a changed or
+/// missing input file, a checkpoint it cannot use, a scenario that no
+/// longer reads): status `"failed"`, message `"cannot resume: {why}"`, the
+/// counts of the session the history and checkpoint come from kept (see
+/// [`record_failure`]; a `"completed"` run's summary is left alone).
+/// Returns the message. The command line and the Python package record
+/// their refusals with it, so that they say the same.
+///
+/// # Errors
+/// The summary could not be written.
+pub fn record_refused_resume(out: &Path, why: &dyn std::fmt::Display) -> std::io::Result<String> {
+    let message = format!("cannot resume: {why}");
+    record_failure(out, None, true, &message).map(|()| message)
 }
 
 /// [`run_with`] but for the summary of a failure before the loop;
@@ -569,6 +624,7 @@ fn run_session(
             )
             .map_err(|e| RunError::Resume(format!("{}: {e}", history_path.display())))?,
             scratch: vec![0.0; model.dofs()],
+            last: None,
         };
         let pvd = PvdWriter::resume(out.join("fields.pvd"), entries).map_err(io_err(out))?;
         (
@@ -601,6 +657,7 @@ fn run_session(
             writer: HistoryWriter::create(&history_path, &history_columns(setup))
                 .map_err(io_err(&history_path))?,
             scratch: vec![0.0; model.dofs()],
+            last: None,
         };
         let strain0 = model.strain_energy(&state.positions);
         let (stretch0, fractions0) = model.stretch_and_states(&state.positions);
@@ -826,21 +883,9 @@ impl Stepper<'_, '_> {
     ) -> Result<Option<End>, RunError> {
         let model = &self.setup.model;
         let state = &self.state;
-        let counters = &mut self.counters;
-        counters.step += 1;
-        let step = counters.step;
-        counters.iterations += outcome.newton.iterations;
-        if cutbacks > 0 {
-            counters.cutback_steps += 1;
-        }
-        counters.last_strain = outcome.strain_energy;
+        let step = self.counters.step + 1;
         let ((stretch, element), fractions) = model.stretch_and_states(&state.positions);
         self.last_contact = contact_report(model, state);
-        if counters.first_contact_time.is_none()
-            && self.last_contact.as_ref().is_some_and(|c| c.active > 0)
-        {
-            counters.first_contact_time = Some(state.time);
-        }
         if self.first_step_seconds.is_none() {
             self.first_step_seconds = Some(self.start.elapsed().as_secs_f64() - self.setup_seconds);
         }
@@ -859,6 +904,20 @@ impl Stepper<'_, '_> {
             },
         )?;
         self.output_seconds += output_start.elapsed().as_secs_f64();
+        // The step counts once its row is on disk: a row that cannot be
+        // written ends the run with a summary of the rows there are.
+        let counters = &mut self.counters;
+        counters.step = step;
+        counters.iterations += outcome.newton.iterations;
+        if cutbacks > 0 {
+            counters.cutback_steps += 1;
+        }
+        counters.last_strain = outcome.strain_energy;
+        if counters.first_contact_time.is_none()
+            && self.last_contact.as_ref().is_some_and(|c| c.active > 0)
+        {
+            counters.first_contact_time = Some(state.time);
+        }
         (self.observer)(&StepInfo {
             step,
             time: state.time,
@@ -982,14 +1041,23 @@ impl Stepper<'_, '_> {
         let at_rest = matches!(end, End::AtRest);
         self.output_seconds += output_start.elapsed().as_secs_f64();
         let (state, counters) = (&self.state, &self.counters);
-        let kinetic = setup
-            .model
-            .kinetic_energy(&state.velocities, &mut self.history.scratch);
+        // The summary reports the history's last row: the state itself,
+        // unless its row could not be written; a resumed session that
+        // wrote none ends at its checkpoint's state, the last row there.
+        let figures = match self.history.last.take() {
+            Some(figures) => figures,
+            None => {
+                let kinetic = setup
+                    .model
+                    .kinetic_energy(&state.velocities, &mut self.history.scratch);
+                Figures::of(setup, state, kinetic, counters.last_strain)
+            }
+        };
         let interruption = interrupted.then(|| {
             format!(
                 "interrupted after step {} at t = {:.6} s; resume with `drape run --resume {}`",
                 counters.step,
-                state.time,
+                figures.time,
                 self.out.display()
             )
         });
@@ -1002,14 +1070,12 @@ impl Stepper<'_, '_> {
         };
         let mut summary = summary(
             setup,
-            state,
+            &figures,
             message,
             counters.step,
             counters.iterations,
             counters.cutback_steps,
             self.start,
-            kinetic,
-            counters.last_strain,
         );
         summary.wall_seconds += counters.wall_seconds;
         summary.setup_seconds = self.setup_seconds;
@@ -1022,7 +1088,7 @@ impl Stepper<'_, '_> {
             summary.status = "interrupted".into();
         }
         if let Some(watch) = self.rest.filter(|_| at_rest) {
-            summary.message = watch.message(state.time, counters.step);
+            summary.message = watch.message(figures.time, counters.step);
             summary.at_rest = Some(true);
         }
         if let Err(e) = write_summary(self.out, &summary) {
@@ -1057,17 +1123,16 @@ fn contact_report(model: &Model, state: &State) -> Option<ContactReport> {
         .map(|(c, s)| c.report(&state.positions, state.time, s))
 }
 
-#[allow(clippy::too_many_arguments)]
+/// The summary of a run after `steps` steps whose last state has
+/// `figures`; failed when there is a `failure` message.
 fn summary(
     setup: &Setup,
-    state: &State,
+    figures: &Figures,
     failure: Option<String>,
     steps: usize,
     iterations: usize,
     cutbacks: usize,
     start: Instant,
-    kinetic: f64,
-    strain: f64,
 ) -> Summary {
     let model = &setup.model;
     Summary {
@@ -1079,12 +1144,12 @@ fn summary(
         .into(),
         message: failure.unwrap_or_else(|| {
             let noun = if steps == 1 { "step" } else { "steps" };
-            format!("completed {steps} {noun} to t = {:.6} s", state.time)
+            format!("completed {steps} {noun} to t = {:.6} s", figures.time)
         }),
         at_rest: setup.rest.map(|_| false),
         title: setup.title.clone(),
         steps,
-        time: state.time,
+        time: figures.time,
         first_contact_time: None,
         newton_iterations: iterations,
         cutbacks,
@@ -1097,20 +1162,23 @@ fn summary(
         elements: model.mesh.element_count(),
         dofs: model.dofs(),
         fixed_dofs: model.fixed_count(),
-        kinetic_energy: kinetic,
-        strain_energy: strain,
-        external_work: state.external_work,
-        monitors: setup
-            .monitors
-            .iter()
-            .map(|m| {
-                let p = &state.positions[3 * m.node..3 * m.node + 3];
-                (m.name.clone(), [p[0], p[1], p[2]])
-            })
+        kinetic_energy: figures.kinetic,
+        strain_energy: figures.strain,
+        external_work: figures.external_work,
+        monitors: (setup.monitors.iter())
+            .zip(&figures.monitors)
+            .map(|(m, p)| (m.name.clone(), *p))
             .collect(),
         linear: Default::default(),
         warnings: warnings(setup),
     }
+}
+
+/// The figures of the initial state, at rest and unstrained: the
+/// summary of a run that could not start.
+fn initial_figures(setup: &Setup) -> Figures {
+    let state = State::at_rest(&setup.model, setup.model.initial_positions());
+    Figures::of(setup, &state, 0.0, 0.0)
 }
 
 fn write_summary(out: &Path, summary: &Summary) -> Result<(), RunError> {
@@ -1121,17 +1189,14 @@ fn write_summary(out: &Path, summary: &Summary) -> Result<(), RunError> {
 
 /// Writes a failed summary for a run that could not start, and returns the error.
 fn setup_failure(setup: &Setup, out: &Path, start: Instant, message: String) -> RunError {
-    let state = State::at_rest(&setup.model, setup.model.initial_positions());
     let summary = summary(
         setup,
-        &state,
+        &initial_figures(setup),
         Some(message.clone()),
         0,
         0,
         0,
         start,
-        0.0,
-        0.0,
     );
     match write_summary(out, &summary) {
         Ok(()) => RunError::Setup(message),

@@ -77,10 +77,16 @@ impl SparsePattern {
             transpose: Vec::new(),
             diagonal: Vec::new(),
         };
-        pattern.transpose = (0..ndof)
-            .flat_map(|c| (pattern.col_ptr[c]..pattern.col_ptr[c + 1]).map(move |k| (c, k)))
-            .map(|(c, k)| pattern.find(c, pattern.row_idx[k]).unwrap_or(usize::MAX))
-            .collect();
+        // Reserved at its length: collected from the flattened columns, it
+        // would grow by doubling, holding up to three times its size while
+        // it is moved (the largest array of the model's build).
+        let mut transpose = Vec::with_capacity(pattern.row_idx.len());
+        transpose.extend(
+            (0..ndof)
+                .flat_map(|c| (pattern.col_ptr[c]..pattern.col_ptr[c + 1]).map(move |k| (c, k)))
+                .map(|(c, k)| pattern.find(c, pattern.row_idx[k]).unwrap_or(usize::MAX)),
+        );
+        pattern.transpose = transpose;
         pattern.diagonal = (0..ndof)
             .map(|d| pattern.find(d, d).unwrap_or(usize::MAX))
             .collect();
@@ -225,15 +231,12 @@ impl SparsePattern {
     }
 }
 
-/// Greedy colouring of elements so that no two elements of one colour share
-/// a node: the elements of one colour can be assembled in parallel without
-/// write conflicts.
-pub fn colour_elements<'a>(
+/// The elements incident to each of `nodes` nodes, in CSR form `(ptr,
+/// incident)`: node `a`'s are `incident[ptr[a]..ptr[a + 1]]`, in order.
+fn incidence<'a>(
     nodes: usize,
     elements: impl Iterator<Item = &'a [usize]> + Clone,
-) -> Vec<Vec<usize>> {
-    let count = elements.clone().count();
-    // Node -> incident elements.
+) -> (Vec<usize>, Vec<usize>) {
     let mut ptr = vec![0usize; nodes + 1];
     for el in elements.clone() {
         for &a in el {
@@ -245,12 +248,52 @@ pub fn colour_elements<'a>(
     }
     let mut fill = ptr.clone();
     let mut incident = vec![0usize; ptr[nodes]];
-    for (e, el) in elements.clone().enumerate() {
+    for (e, el) in elements.enumerate() {
         for &a in el {
             incident[fill[a]] = e;
             fill[a] += 1;
         }
     }
+    (ptr, incident)
+}
+
+/// The number of 3x3 node blocks — the node graph's entries, diagonal
+/// included — that [`SparsePattern::new`] would store for the same
+/// arguments, counted without building it: the node-element incidence and
+/// one mark a node (`O(nodes + sum of stencil sizes)` words, against the
+/// pattern's 27 words a block). The memory a pattern needs is known from it
+/// before the pattern is allocated (`crate::memory::pattern_estimate`).
+pub fn block_count<'a>(nodes: usize, elements: impl Iterator<Item = &'a [usize]> + Clone) -> usize {
+    let stencils: Vec<&[usize]> = elements.clone().collect();
+    let (ptr, incident) = incidence(nodes, elements);
+    // mark[a] == b: node a is counted in column b already.
+    let mut mark = vec![usize::MAX; nodes];
+    let mut blocks = 0;
+    for b in 0..nodes {
+        // The diagonal block, there even for a node of no element.
+        mark[b] = b;
+        blocks += 1;
+        for &e in &incident[ptr[b]..ptr[b + 1]] {
+            for &a in stencils[e] {
+                if mark[a] != b {
+                    mark[a] = b;
+                    blocks += 1;
+                }
+            }
+        }
+    }
+    blocks
+}
+
+/// Greedy colouring of elements so that no two elements of one colour share
+/// a node: the elements of one colour can be assembled in parallel without
+/// write conflicts.
+pub fn colour_elements<'a>(
+    nodes: usize,
+    elements: impl Iterator<Item = &'a [usize]> + Clone,
+) -> Vec<Vec<usize>> {
+    let count = elements.clone().count();
+    let (ptr, incident) = incidence(nodes, elements.clone());
     let mut colour = vec![usize::MAX; count];
     let mut used: Vec<usize> = Vec::new(); // used[c] == e marks colour c taken for element e
     let mut colours: Vec<Vec<usize>> = Vec::new();
@@ -319,6 +362,42 @@ mod tests {
             assert_eq!(p.transpose_of(p.transpose_of(k)), k);
         }
         assert_eq!(p.find(0, 12), None);
+    }
+
+    /// The count of blocks without the pattern is the pattern's: a mesh
+    /// with a node of no element, the membrane's elements of every order,
+    /// and with bending's stencils chained to them.
+    #[test]
+    fn block_count_is_the_patterns_block_count() {
+        let elements = [vec![0usize, 1, 2], vec![1, 3, 2], vec![3, 4, 2]];
+        let iter = || elements.iter().map(|e| e.as_slice());
+        let with_orphan = SparsePattern::new(6, iter());
+        assert_eq!(block_count(6, iter()), with_orphan.node_graph().1.len());
+        for order in [
+            crate::mesh::ElementOrder::Linear,
+            crate::mesh::ElementOrder::Quadratic,
+            crate::mesh::ElementOrder::Cubic,
+        ] {
+            let mesh = crate::mesh::generate::rectangle(
+                [1.0, 1.0],
+                [7, 5],
+                crate::mesh::generate::Pattern::Alternate,
+                [0.0; 3],
+                order,
+            );
+            let n = mesh.node_count();
+            let membrane = SparsePattern::new(n, mesh.elements());
+            assert_eq!(
+                block_count(n, mesh.elements()),
+                membrane.node_graph().1.len()
+            );
+            let (ptr, nodes) = crate::bending::stencils_of(&mesh).unwrap();
+            let stencils = || ptr.windows(2).map(|w| &nodes[w[0]..w[1]]);
+            let bending = SparsePattern::new(n, mesh.elements().chain(stencils()));
+            let blocks = block_count(n, mesh.elements().chain(stencils()));
+            assert_eq!(blocks, bending.node_graph().1.len());
+            assert!(blocks > membrane.node_graph().1.len(), "{order:?}");
+        }
     }
 
     #[test]

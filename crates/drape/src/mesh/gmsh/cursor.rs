@@ -44,6 +44,8 @@ pub(super) struct Reader<'a> {
     pub(super) big_endian: bool,
     /// Size of `size_t` in a binary 4.1 file.
     pub(super) size_t: usize,
+    /// Most nodes `$Nodes` may declare.
+    pub(super) max_nodes: usize,
 }
 
 impl<'a> Reader<'a> {
@@ -64,7 +66,23 @@ impl<'a> Reader<'a> {
             binary: false,
             big_endian: false,
             size_t: 8,
+            max_nodes: super::super::MAX_MESH_NODES,
         }
+    }
+
+    /// Refuses a `$Nodes` section that declares (at `at`) more than
+    /// [`Reader::max_nodes`] nodes, before any is read.
+    pub(super) fn check_node_count(&self, count: u64, at: Location) -> Result<(), MeshReadError> {
+        if usize::try_from(count).is_ok_and(|n| n <= self.max_nodes) {
+            return Ok(());
+        }
+        Err(MeshReadError::TooManyNodes {
+            file: self.file.to_owned(),
+            at: Some(at),
+            count,
+            declared: true,
+            limit: self.max_nodes,
+        })
     }
 
     pub(super) fn here(&self) -> Location {
@@ -423,7 +441,7 @@ impl<'a> Reader<'a> {
 )]
 mod tests {
     use crate::mesh::gmsh::fixtures::*;
-    use crate::mesh::gmsh::{Location, MeshReadError, parse_msh};
+    use crate::mesh::gmsh::{Location, MeshReadError, parse_msh, parse_msh_at_most};
 
     #[test]
     fn error_truncated_file() {
@@ -490,8 +508,14 @@ mod tests {
         );
     }
 
+    /// Counts past the file's size fail fast, without reserving memory
+    /// for them; read without a node cap (which would refuse the node
+    /// counts first), so that the bound by the file's size is what is
+    /// tested.
     #[test]
     fn error_huge_counts_fail_fast_without_allocating() {
+        let uncapped = |bytes: &[u8]| parse_msh_at_most(bytes, "bin.msh", usize::MAX);
+        let parse = |text: &str| uncapped(text.as_bytes());
         let start = std::time::Instant::now();
         // ASCII 2.2.
         let text = V22_T3.replace("$Nodes\n4\n", "$Nodes\n1000000000000\n");
@@ -512,10 +536,10 @@ mod tests {
         bytes2.extend_from_slice(&bytes[..at]);
         bytes2.extend_from_slice(b"$Nodes\n1000000000000\n");
         bytes2.extend_from_slice(&bytes[at + 9..]);
-        let err = parse_msh(&bytes2, "bin.msh").unwrap_err();
+        let err = uncapped(&bytes2).unwrap_err();
         assert!(matches!(err, MeshReadError::Truncated { .. }), "{err}");
         // Binary 4.1: the header and a block.
-        let err = parse_msh(&v41_binary_t6_bytes(Some(1_000_000_000_000)), "bin.msh").unwrap_err();
+        let err = uncapped(&v41_binary_t6_bytes(Some(1_000_000_000_000))).unwrap_err();
         assert!(matches!(err, MeshReadError::Truncated { .. }), "{err}");
         let mut b = Bin::new();
         b.s("$MeshFormat\n4.1 1 8\n")
@@ -529,7 +553,7 @@ mod tests {
             .i(1)
             .i(0)
             .z(u64::MAX);
-        let err = parse_msh(&b.v, "bin.msh").unwrap_err();
+        let err = uncapped(&b.v).unwrap_err();
         assert!(matches!(err, MeshReadError::Truncated { .. }), "{err}");
         assert!(start.elapsed() < std::time::Duration::from_secs(2));
     }

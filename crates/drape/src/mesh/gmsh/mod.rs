@@ -36,7 +36,11 @@
 //!
 //! The reader does not panic on any input and never reserves memory for
 //! more records than the rest of the file could hold, so a corrupt count
-//! gives an error, not an out-of-memory abort.
+//! gives an error, not an out-of-memory abort. A `$Nodes` section that
+//! declares more nodes than a mesh may have ([`MAX_MESH_NODES`], or the cap
+//! given to [`parse_msh_at_most`]) is refused from its count, before its
+//! nodes are read — all the nodes the file holds count, used by its
+//! triangles or not.
 //!
 //! The reader's files: this one holds the entry points and the
 //! `$MeshFormat` header that tells the versions apart; `cursor` the byte
@@ -56,7 +60,7 @@
 
 use std::path::Path;
 
-use super::Mesh;
+use super::{MAX_MESH_NODES, Mesh};
 use cursor::{Reader, show};
 use records::{Node, Triangles, finish};
 
@@ -80,12 +84,26 @@ pub fn read_msh(path: &Path) -> Result<Mesh, MeshReadError> {
 }
 
 /// Parses the bytes of a Gmsh MSH file (2.2 or 4.1, ASCII or binary) into a
-/// [`Mesh`]; `source` is the file name used in error messages.
+/// [`Mesh`]; `source` is the file name used in error messages. A file
+/// whose `$Nodes` declares more than [`MAX_MESH_NODES`] nodes is refused
+/// ([`MeshReadError::TooManyNodes`]).
 ///
 /// See the [module documentation](self) for what is read and how nodes are
 /// numbered.
 pub fn parse_msh(bytes: &[u8], source: &str) -> Result<Mesh, MeshReadError> {
+    parse_msh_at_most(bytes, source, MAX_MESH_NODES)
+}
+
+/// [`parse_msh`] with a cap of `max_nodes` nodes: a `$Nodes` section that
+/// declares more is refused from its count, before its nodes are read or
+/// memory is reserved for them.
+pub fn parse_msh_at_most(
+    bytes: &[u8],
+    source: &str,
+    max_nodes: usize,
+) -> Result<Mesh, MeshReadError> {
     let mut reader = Reader::new(bytes, source);
+    reader.max_nodes = max_nodes;
     let version = reader.read_format()?;
     let mut nodes: Option<Vec<Node>> = None;
     let mut triangles = Triangles::default();
@@ -293,6 +311,57 @@ mod tests {
         assert_eq!(err.file(), missing.display().to_string());
         assert!(err.to_string().starts_with(&missing.display().to_string()));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The cap on nodes, given small: a file declaring up to it is read,
+    /// one declaring more is refused from its count — in 2.2 and 4.1,
+    /// ASCII and binary — naming the file, the count's line (or byte) and
+    /// the count, before any node is read: a count far beyond the file's
+    /// records says the same.
+    #[test]
+    fn a_declared_node_count_above_the_cap_is_refused_before_reading() {
+        for (text, line) in [(V22_T3, 10), (V41_T3, 21)] {
+            let m = parse_msh_at_most(text.as_bytes(), "cap.msh", 4).unwrap();
+            assert_eq!(m.node_count(), 4);
+            let err = parse_msh_at_most(text.as_bytes(), "cap.msh", 3).unwrap_err();
+            assert!(
+                matches!(
+                    &err,
+                    MeshReadError::TooManyNodes {
+                        count: 4,
+                        declared: true,
+                        limit: 3,
+                        ..
+                    }
+                ),
+                "{err:?}"
+            );
+            assert_eq!(
+                err.to_string(),
+                format!(
+                    "cap.msh, line {line}: $Nodes declares 4 nodes, more than the 3 nodes a mesh may have; use a coarser mesh"
+                )
+            );
+        }
+        for bytes in [v22_binary_t3(false), v41_binary_t6_bytes(None)] {
+            let err = parse_msh_at_most(&bytes, "cap.msh", 2).unwrap_err();
+            assert!(
+                matches!(
+                    err,
+                    MeshReadError::TooManyNodes {
+                        at: Some(Location::Byte(_)),
+                        ..
+                    }
+                ),
+                "{err:?}"
+            );
+        }
+        let huge = V22_T3.replace("$Nodes\n4\n", "$Nodes\n3000001\n");
+        let err = parse(&huge).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "test.msh, line 10: $Nodes declares 3000001 nodes, more than the 3000000 nodes a mesh may have; use a coarser mesh"
+        );
     }
 
     #[test]

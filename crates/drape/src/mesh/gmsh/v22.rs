@@ -20,7 +20,8 @@ impl Reader<'_> {
     /// `$Nodes` of MSH 2: a count, then `tag x y z` records.
     pub(super) fn nodes_v2(&mut self) -> Result<Vec<Node>, MeshReadError> {
         const SECTION: &str = "$Nodes";
-        let (count, _) = self.count_line(SECTION, "the number of nodes")?;
+        let (count, at) = self.count_line(SECTION, "the number of nodes")?;
+        self.check_node_count(count, at)?;
         let mut nodes = Vec::new();
         if self.binary {
             const RECORD: usize = 4 + 3 * 8;

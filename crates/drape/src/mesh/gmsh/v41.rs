@@ -22,6 +22,7 @@ impl<'a> Reader<'a> {
     pub(super) fn nodes_v41(&mut self) -> Result<Vec<Node>, MeshReadError> {
         let header_at = self.here();
         let (blocks, count) = self.header_v41(NODES, "nodes")?;
+        self.check_node_count(count, header_at)?;
         let min_record = if self.binary {
             self.size_t + 24
         } else {
