@@ -1042,16 +1042,6 @@ const BAD_INPUTS: &[BadInput] = &[
         line: Some(17),
     },
     BadInput {
-        file: "rest_after_end.toml",
-        fragments: &[
-            "`time.rest.after`",
-            "0.25 s",
-            "schedule's end (t = 0.2",
-            "never",
-        ],
-        line: Some(18),
-    },
-    BadInput {
         file: "rest_unknown_key.toml",
         fragments: &["`time.rest`", "unknown field `aftr`", "`speed` or `after`"],
         line: Some(17),

@@ -34,6 +34,7 @@ const BIAXIAL_COMPRESSION: [f64; 3] = [-0.01, -0.01, 0.0];
 pub fn warnings(setup: &Setup) -> Vec<String> {
     let mut out = Vec::new();
     tension_field_with_bending(setup, &mut out);
+    rest_after_the_end(setup, &mut out);
     fast_obstacles(setup, &mut out);
     out
 }
@@ -45,6 +46,22 @@ fn tension_field_with_bending(setup: &Setup, out: &mut Vec<String>) {
         out.push(
             "material.wrinkling is a tension-field model and material.bending_rigidity is set: compressed elements have no in-plane stiffness and, with bending, may collapse, which makes the steps tiny; with bending the mesh resolves the folds, so wrinkling = \"none\" is the model to use (README, \"Bending\")".to_string(),
         );
+    }
+}
+
+/// A rest criterion that starts counting at or after the schedule's end,
+/// so that it can never be met (a schedule shortened for a quick look
+/// does that; the run then ends "completed" with no word of rest).
+fn rest_after_the_end(setup: &Setup, out: &mut Vec<String>) {
+    let (Some(rest), Analysis::Dynamic { segments, .. }) = (&setup.rest, &setup.analysis) else {
+        return;
+    };
+    let end: f64 = segments.iter().map(|&(steps, dt)| steps as f64 * dt).sum();
+    if rest.after >= end {
+        out.push(format!(
+            "time.rest.after = {} s is at or after the schedule's end (t = {end} s): the rest criterion can never be met, and the run will end at t = {end} s whether or not the fabric is at rest",
+            rest.after
+        ));
     }
 }
 
@@ -91,18 +108,23 @@ mod tests {
     use crate::scenario::Scenario;
     use std::path::Path;
 
-    /// The warnings of a 4 x 4 square with `material` lines added.
-    fn warned(material: &str) -> Vec<String> {
+    /// The warnings of a 4 x 4 square with `material` lines added to
+    /// `[material]` and `time` lines to `[time]` (one 10 ms step).
+    fn warned_with(material: &str, time: &str) -> Vec<String> {
         let text = format!(
             "title = \"w\"\n[mesh]\nshape = \"rectangle\"\nsize = [0.1, 0.1]\ndivisions = [4, 4]\n\
              [material]\nyoungs_modulus = 2.0e6\npoisson_ratio = 0.3\ndensity = 320.0\nthickness = 0.6e-3\n{material}\n\
-             [time]\nsegments = [{{ steps = 1, dt = 0.01 }}]\n"
+             [time]\nsegments = [{{ steps = 1, dt = 0.01 }}]\n{time}\n"
         );
         let path = Path::new("w.toml");
         let setup = Scenario::parse(&text, path)
             .and_then(|s| s.build(path, &text))
             .expect("a valid scenario");
         warnings(&setup)
+    }
+
+    fn warned(material: &str) -> Vec<String> {
+        warned_with(material, "")
     }
 
     #[test]
@@ -118,5 +140,19 @@ mod tests {
         assert!(warned("wrinkling = \"none\"\nbending_rigidity = 2.0e-5").is_empty());
         assert!(warned("wrinkling = \"stress-projection\"").is_empty());
         assert!(warned("").is_empty());
+    }
+
+    #[test]
+    fn a_rest_criterion_after_the_end_is_warned_about() {
+        // The square's schedule ends at t = 0.01 s.
+        let rest =
+            |after: f64| warned_with("", &format!("rest = {{ speed = 1e-4, after = {after} }}"));
+        let w = rest(0.5);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].contains("time.rest.after = 0.5 s") && w[0].contains("never"),
+            "{w:?}"
+        );
+        assert!(rest(0.0).is_empty());
     }
 }
