@@ -292,18 +292,18 @@ fn check(path: &Path) -> Result<(), Failure> {
     println!("  title     {}", setup.title);
     println!(
         "  mesh      {} nodes, {} triangles of order {}, {} DOF ({} fixed)",
-        m.mesh.node_count(),
-        m.mesh.element_count(),
-        m.mesh.order.degree(),
+        m.mesh().node_count(),
+        m.mesh().element_count(),
+        m.mesh().order.degree(),
         m.dofs(),
         m.fixed_count()
     );
-    let mass_kind = match m.mass_kind {
+    let mass_kind = match m.mass_kind() {
         drape::model::MassKind::Consistent => "consistent",
         drape::model::MassKind::Lumped => "lumped",
     };
     println!("  mass      {:.6e} kg ({mass_kind})", m.total_mass());
-    println!("  loads     {}", m.loads.len());
+    println!("  loads     {}", m.loads().len());
     match &setup.analysis {
         drape::scenario::Analysis::Dynamic { newmark, segments } => {
             let steps: usize = segments.iter().map(|s| s.0).sum();
@@ -347,7 +347,9 @@ fn check(path: &Path) -> Result<(), Failure> {
     for mon in &setup.monitors {
         println!(
             "  monitor   {} -> node {} at {:?}",
-            mon.name, mon.node, m.mesh.nodes[mon.node]
+            mon.name,
+            mon.node,
+            m.mesh().nodes[mon.node]
         );
     }
     Ok(())

@@ -298,7 +298,7 @@ impl Bending {
 
     /// Records where each patch's Hessian blocks lie in `pattern` (which
     /// must include the stencils).
-    pub fn attach(&mut self, pattern: &SparsePattern, parallel: bool) {
+    pub(crate) fn attach(&mut self, pattern: &SparsePattern, parallel: bool) {
         self.blocks.clear();
         self.block_start.clear();
         self.colours = if parallel {

@@ -184,39 +184,31 @@ impl Scenario {
         let monitors = build_monitors(&c, &mesh, &self.monitors)?;
         check_memory(&c, &self.mesh, mesh.node_count())?;
 
-        let mut model = Model::new(
-            mesh,
-            material,
-            section,
-            density,
-            loads,
-            fixed,
-            self.analysis.mass,
-        )
-        .map_err(|e| match e {
-            ModelError::Axis(e) => c.invalid("material", None, "warp_direction", e.to_string()),
-            e => ScenarioError::Mesh {
-                file: file.to_path_buf(),
-                message: e.to_string(),
-            },
-        })?;
-        if let Some(rigidity) = bending {
-            model = model.with_bending(rigidity).map_err(|e| match e {
-                ModelError::Bending(BendingError::Axis(e)) => {
+        let model = Model::builder(mesh, material, section, density)
+            .loads(loads)
+            .fixed(fixed)
+            .mass(self.analysis.mass)
+            .contact(contact)
+            .bending(bending)
+            .build()
+            .map_err(|e| match e {
+                ModelError::Axis(e) | ModelError::Bending(BendingError::Axis(e)) => {
                     c.invalid("material", None, "warp_direction", e.to_string())
                 }
-                e => c.invalid(
+                ModelError::Bending(e) => c.invalid(
                     "material",
                     None,
                     "bending_rigidity",
                     format!("cannot be set up on this mesh: {e}"),
                 ),
+                e => ScenarioError::Mesh {
+                    file: file.to_path_buf(),
+                    message: e.to_string(),
+                },
             })?;
+        if let Some(contact) = model.contact() {
+            check_initial_penetration(&c, model.mesh(), contact)?;
         }
-        if let Some(contact) = &contact {
-            check_initial_penetration(&c, &model.mesh, contact)?;
-        }
-        model.contact = contact;
         let title = self.title.clone().unwrap_or_else(|| {
             file.file_stem()
                 .map(|s| s.to_string_lossy().into_owned())

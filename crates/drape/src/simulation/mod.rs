@@ -884,7 +884,7 @@ impl Stepper<'_, '_> {
         }
         // With a wrinkling model compression carries no stress, and the
         // instability does not exist.
-        if stretch < SVK_CRITICAL_STRETCH && model.material.wrinkle_state([0.0; 3]).is_none() {
+        if stretch < SVK_CRITICAL_STRETCH && model.material().wrinkle_state([0.0; 3]).is_none() {
             return Ok(Some(End::Failed(RunError::MaterialInstability {
                 time: state.time,
                 element,
@@ -1051,8 +1051,7 @@ impl Stepper<'_, '_> {
 /// The contact report of `state`, if the model has contact.
 fn contact_report(model: &Model, state: &State) -> Option<ContactReport> {
     model
-        .contact
-        .as_ref()
+        .contact()
         .zip(state.contact.as_ref())
         .map(|(c, s)| c.report(&state.positions, state.time, s))
 }
@@ -1093,8 +1092,8 @@ fn summary(
         output_seconds: 0.0,
         output_thread_seconds: 0.0,
         first_step_seconds: 0.0,
-        nodes: model.mesh.node_count(),
-        elements: model.mesh.element_count(),
+        nodes: model.mesh().node_count(),
+        elements: model.mesh().element_count(),
         dofs: model.dofs(),
         fixed_dofs: model.fixed_count(),
         kinetic_energy: kinetic,

@@ -20,7 +20,7 @@ pub const MAX_MOTION_PER_STEP: f64 = 0.5;
 /// The warnings of `setup` (none for most scenarios).
 pub fn warnings(setup: &Setup) -> Vec<String> {
     let mut out = Vec::new();
-    let Some(contact) = &setup.model.contact else {
+    let Some(contact) = setup.model.contact() else {
         return out;
     };
     // Load steps of a static analysis are not time: bodies do not move.
@@ -34,7 +34,7 @@ pub fn warnings(setup: &Setup) -> Vec<String> {
             None => dt,
         })
         .fold(0.0, f64::max);
-    let mesh = &setup.model.mesh;
+    let mesh = setup.model.mesh();
     let edge = mesh
         .elements()
         .flat_map(|el| {
