@@ -70,9 +70,20 @@ pub enum BlockLuError {
         /// The (original) node index of the pivot.
         node: usize,
     },
+    /// The node graph is not symmetric: node `row` is in column
+    /// `column`, but `column` is not in column `row`.
+    #[error(
+        "the node graph is not symmetric: node {row} couples to node {column}, but not node {column} to node {row}"
+    )]
+    NotSymmetric {
+        /// A node of the column.
+        row: usize,
+        /// The column.
+        column: usize,
+    },
     /// The fill-reducing ordering failed.
     #[error("the minimum degree ordering failed: {0}")]
-    Ordering(String),
+    Ordering(super::linear_error::FaerFailure),
 }
 
 /// Where block `(I, J)` of the permuted matrix sits in the scalar CSC
