@@ -10,7 +10,7 @@ use super::{
 use crate::bending::BendingError;
 use crate::integrator::Newmark;
 use crate::load::{Load, LoadKind};
-use crate::mesh::{ElementOrder, Mesh, generate};
+use crate::mesh::{ElementOrder, Mesh, MeshReadError, generate};
 use crate::model::{Model, ModelError};
 use crate::simulation::schedule::{AdaptiveSteps, RestCriterion};
 use crate::solver::NewtonSettings;
@@ -201,9 +201,9 @@ impl Scenario {
                     "bending_rigidity",
                     format!("cannot be set up on this mesh: {e}"),
                 ),
-                e => ScenarioError::Mesh {
+                error => ScenarioError::Mesh {
                     file: file.to_path_buf(),
-                    message: e.to_string(),
+                    error,
                 },
             })?;
         if let Some(contact) = model.contact() {
@@ -614,7 +614,7 @@ fn build_mesh(
     check_extent(c, spec, &mesh)?;
     mesh.validate().map_err(|e| ScenarioError::Mesh {
         file: c.file.to_path_buf(),
-        message: e.to_string(),
+        error: e.into(),
     })?;
     Ok(mesh)
 }
@@ -870,7 +870,7 @@ fn file_mesh(
     let rel = c.required(t, None, "path", &spec.path, "for shape = \"file\"")?;
     let path: PathBuf = base.join(&rel);
     let (mesh, bytes) =
-        read_mesh_file_bytes(&path).map_err(|message| c.invalid(t, None, "path", message))?;
+        read_mesh_file_bytes(&path).map_err(|e| c.invalid(t, None, "path", e.to_string()))?;
     inputs.push(InputFile::new("mesh.path".into(), &path, &bytes));
     mesh.validate()
         .map_err(|e| c.invalid(t, None, "path", format!("{}: {e}", path.display())))?;
@@ -892,14 +892,15 @@ fn file_mesh(
     Ok(mesh)
 }
 
-/// Reads a `.msh` or `.obj` mesh file.
-pub fn read_mesh_file(path: &Path) -> Result<Mesh, String> {
+/// Reads a `.msh` (Gmsh) or `.obj` (Wavefront) mesh file, by its
+/// extension.
+pub fn read_mesh_file(path: &Path) -> Result<Mesh, MeshReadError> {
     read_mesh_file_bytes(path).map(|(mesh, _)| mesh)
 }
 
 /// [`read_mesh_file`], with the file's bytes as read (their hash is
 /// recorded, for a resume to tell a changed file).
-fn read_mesh_file_bytes(path: &Path) -> Result<(Mesh, Vec<u8>), String> {
+fn read_mesh_file_bytes(path: &Path) -> Result<(Mesh, Vec<u8>), MeshReadError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -907,10 +908,14 @@ fn read_mesh_file_bytes(path: &Path) -> Result<(Mesh, Vec<u8>), String> {
     let parse = match ext.as_deref() {
         Some("msh") => crate::mesh::gmsh::parse_msh,
         Some("obj") => crate::mesh::obj::parse_obj,
-        _ => return Err("unknown mesh format: expected a .msh (Gmsh) or .obj file".into()),
+        _ => {
+            return Err(MeshReadError::UnknownFormat {
+                file: path.display().to_string(),
+            });
+        }
     };
-    let (bytes, file) = crate::mesh::MeshReadError::read(path).map_err(|e| e.to_string())?;
-    let mesh = parse(&bytes, &file).map_err(|e| e.to_string())?;
+    let (bytes, file) = MeshReadError::read(path)?;
+    let mesh = parse(&bytes, &file)?;
     Ok((mesh, bytes))
 }
 
