@@ -21,7 +21,8 @@ pub struct BendingTerm<'a> {
 
 impl<'a> BendingTerm<'a> {
     /// The term of `bending`, adding its Hessian on `pattern` (the
-    /// pattern [`Bending::attach`] was given).
+    /// model's [`Model::pattern`](crate::model::Model::pattern), which holds
+    /// the bending stencils).
     pub fn new(bending: &'a Bending, pattern: &'a SparsePattern) -> Self {
         Self {
             bending,
