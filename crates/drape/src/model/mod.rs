@@ -470,9 +470,8 @@ impl Model {
     /// [`PARALLEL_ABOVE`] elements they run in two halves on the calling
     /// thread and [`crate::par`]'s helper instead: waking a sleeping rayon
     /// worker for a colour of ~120 elements or a loop over ~400 nodes
-    /// costs more than the loop (on the 20x20 pedestal the hand-offs took
-    /// a third of the CPU time), a spinning helper does not
-    /// (docs/performance.md). Results do not depend on the thread count:
+    /// costs more than the loop, a spinning helper does not
+    /// (docs/performance.md, "The round before"). Results do not depend on the thread count:
     /// the splits are fixed and partial sums are added in order.
     pub fn parallel(&self) -> bool {
         self.mesh.element_count() >= PARALLEL_ABOVE

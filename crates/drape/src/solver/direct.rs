@@ -77,7 +77,8 @@ impl Cholesky {
             let params = CholeskySymbolicParams {
                 // faer picks its simplicial kernel below a flop threshold;
                 // with 3x3 node blocks the supernodal one is faster at every
-                // size measured here (the 20x20 pedestal: -39 % CPU).
+                // size measured (docs/performance.md, "The pedestal after
+                // the first optimisations").
                 supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
                 ..Default::default()
             };

@@ -134,13 +134,14 @@ pub struct LinearStats {
 const AUTO_ITERATIVE_ABOVE: usize = 300_000;
 /// Largest symmetric system (unknowns) that `direct` and `auto` factorise
 /// by the node-block LU: above it faer's supernodal Cholesky, whose dense
-/// kernels pay off on large fronts, is faster (measured: equal at 7,800
-/// unknowns, twice as fast at 30,600; docs/performance.md).
+/// kernels pay off on large fronts, is faster (docs/performance.md, "The
+/// node-block LU against faer").
 const BLOCK_LU_MAX_SYMMETRIC: usize = 5_000;
 /// Largest non-symmetric system for the node-block LU: above it a
-/// Cholesky factorisation of the symmetric part and ~10 preconditioned
+/// Cholesky factorisation of the symmetric part and a few preconditioned
 /// GMRES iterations cost less than the general block LU (twice the
-/// symmetric one's work).
+/// symmetric one's work; docs/performance.md, "The node-block LU against
+/// faer").
 const BLOCK_LU_MAX_GENERAL: usize = 15_000;
 /// Krylov iterations a reused factor gets before the matrix is refactorised.
 const REUSE_ITERATIONS: usize = 8;
@@ -172,8 +173,9 @@ pub enum LinearMode {
     /// GMRES preconditioned by the Cholesky factor of an earlier Hessian,
     /// refactorised only when it stops converging in 8 iterations (the
     /// Hessian changes little from one Newton iteration and step to the
-    /// next). On the 20x20 pedestal it cuts the factorisations by 3 without
-    /// saving time (docs/performance.md); meant for larger meshes.
+    /// next). On small meshes it saves factorisations but not time
+    /// (docs/performance.md, "Linear-solver modes on the pedestal"); meant
+    /// for larger meshes.
     Reuse,
     /// Conjugate gradients (GMRES when not symmetric) preconditioned by a
     /// smoothed-aggregation multigrid V-cycle ([`super::amg`]): no
@@ -635,8 +637,8 @@ impl LinearSolver {
     /// level's 3x3 blocks, and CG's products use them: they are the
     /// products of the later solves, and the first step's multigrid build
     /// then refills an array that set-up has already written (the first
-    /// write of fresh memory is slow here: about 0.3 s for the 250 MB of a
-    /// million elements).
+    /// write of fresh memory is slow on some machines: docs/performance.md,
+    /// "Fresh memory").
     pub fn solve_mass(&mut self, values: &[f64], rhs: &mut [f64]) -> Result<(), LinearSolveError> {
         self.blocks_current = self.uses_multigrid() && self.load_finest_blocks(values);
         let solved = self

@@ -357,9 +357,9 @@ pub fn solve(
         // loop instead of two). Not when chord steps are likely to be tried
         // first: they reuse the factorisation just made, and a Hessian
         // assembled for nothing costs more than a second evaluation of the
-        // residual when they are not (the pedestal: 2-3 % faster than
-        // expecting chord steps only after a fourfold shrink, the
-        // hanging cloth, the drape tester and the multipliers alike).
+        // residual when they are not (measured against expecting chord
+        // steps only after a fourfold shrink: docs/performance.md, "The
+        // round before").
         let mut hessian_at_trial = full_increment > settings.tolerance && !chord_ahead;
         // With an energy, Armijo's condition on it (the incremental
         // potential's decrease along the Newton direction, whose slope is
