@@ -281,6 +281,94 @@ fn converged(settings: &NewtonSettings, increment: f64, residual: f64, scale: f6
         || increment <= STALLED
 }
 
+/// Whether the iteration ends before iteration `it`: `Ok(true)` when it
+/// has converged ([`converged`]), an error when its residual is not finite
+/// or above `diverged_above` (after the first iteration), or when it is
+/// out of iterations.
+fn ended(
+    settings: &NewtonSettings,
+    it: usize,
+    residual: f64,
+    increment: f64,
+    scale: f64,
+    diverged_above: f64,
+) -> Result<bool, NewtonError> {
+    if !residual.is_finite() {
+        return Err(NewtonError::NonFinite { iteration: it });
+    }
+    if converged(settings, increment, residual, scale) {
+        return Ok(true);
+    }
+    if residual > diverged_above && it > 0 {
+        return Err(NewtonError::Diverged {
+            iteration: it,
+            residual,
+        });
+    }
+    if it >= settings.max_iterations {
+        return Err(NewtonError::NotConverged {
+            iterations: it,
+            residual,
+            increment,
+        });
+    }
+    Ok(false)
+}
+
+/// The line search along `ws.dy` from `ws.y_old` (the module docs): a
+/// full step, halved while it neither lowers the residual below
+/// `residual` nor, with an energy (`energy0` and the direction's `slope`),
+/// meets Armijo's condition — down to 1/16 of the step (1/1024 with an
+/// energy), which is taken whatever it gives. `y` and `eval` are left at
+/// the step taken, its Hessian assembled if `hessian_at_trial` and the
+/// full step was taken. Returns the step's fraction `alpha`, its residual
+/// and whether its Hessian was assembled.
+fn backtrack(
+    system: &mut impl NewtonSystem,
+    y: &mut [f64],
+    ws: &mut NewtonWorkspace,
+    eval: &mut Evaluation,
+    (energy0, slope): (Option<f64>, f64),
+    residual: f64,
+    mut hessian_at_trial: bool,
+) -> (f64, f64, bool) {
+    let shortest = if energy0.is_some() {
+        1.0 / 1024.0
+    } else {
+        1.0 / 16.0
+    };
+    let mut alpha = 1.0;
+    loop {
+        for ((yi, y0), d) in y.iter_mut().zip(&ws.y_old).zip(&ws.dy) {
+            *yi = y0 + alpha * d;
+        }
+        *eval = if hessian_at_trial {
+            system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]))
+        } else {
+            system.evaluate(y, &mut ws.g, None)
+        };
+        let trial = eval.merit.unwrap_or_else(|| norm(&ws.g));
+        // With an energy, a smaller residual counts only where the
+        // energy did not rise beyond its round-off (near the solution,
+        // where Armijo's decrease drowns in it); Armijo's condition
+        // counts on its own.
+        let (armijo, not_higher) = match (energy0, eval.energy) {
+            (Some(e0), Some(e1)) => (
+                slope < 0.0 && e1 <= e0 + 1e-4 * alpha * slope,
+                e1 <= e0 + 1e-12 * e0.abs(),
+            ),
+            _ => (false, true),
+        };
+        let smaller = trial <= (1.0 - 1e-4 * alpha) * residual && not_higher;
+        if (trial.is_finite() && (smaller || armijo)) || alpha <= shortest {
+            return (alpha, trial, hessian_at_trial);
+        }
+        alpha *= 0.5;
+        // (A shortened step is accepted with a residual only.)
+        hessian_at_trial = false;
+    }
+}
+
 /// Runs Newton from the first guess in `y` (overwritten by the solution).
 /// `length`: the reference length `|X|` of the convergence test (m).
 pub fn solve(
@@ -302,28 +390,21 @@ pub fn solve(
     let mut have_hessian = true;
     let mut residual = eval.merit.unwrap_or_else(|| norm(&ws.g));
     report.residuals.push(residual);
-    let (r0, scale0) = (residual, eval.scale);
+    let r0 = residual;
+    // The residual beyond which the iteration has diverged.
+    let diverged_above = 1e8 * r0.max(eval.scale);
     let mut increment = f64::INFINITY;
     loop {
         let it = report.iterations + report.chord_steps;
-        if !residual.is_finite() {
-            return Err(NewtonError::NonFinite { iteration: it });
-        }
-        if converged(settings, increment, residual, eval.scale) {
+        if ended(
+            settings,
+            it,
+            residual,
+            increment,
+            eval.scale,
+            diverged_above,
+        )? {
             return Ok(report);
-        }
-        if residual > 1e8 * r0.max(scale0) && it > 0 {
-            return Err(NewtonError::Diverged {
-                iteration: it,
-                residual,
-            });
-        }
-        if it >= settings.max_iterations {
-            return Err(NewtonError::NotConverged {
-                iterations: it,
-                residual,
-                increment,
-            });
         }
         if !have_hessian {
             eval = system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]));
@@ -360,7 +441,7 @@ pub fn solve(
         // residual when they are not (measured against expecting chord
         // steps only after a fourfold shrink: docs/performance.md, "The
         // round before").
-        let mut hessian_at_trial = full_increment > settings.tolerance && !chord_ahead;
+        let hessian_at_trial = full_increment > settings.tolerance && !chord_ahead;
         // With an energy, Armijo's condition on it (the incremental
         // potential's decrease along the Newton direction, whose slope is
         // G . dY) accepts a step as well as a smaller residual does, and
@@ -372,43 +453,16 @@ pub fn solve(
         } else {
             0.0
         };
-        let shortest = if energy0.is_some() {
-            1.0 / 1024.0
-        } else {
-            1.0 / 16.0
-        };
-        let mut alpha = 1.0;
-        loop {
-            for ((yi, y0), d) in y.iter_mut().zip(&ws.y_old).zip(&ws.dy) {
-                *yi = y0 + alpha * d;
-            }
-            eval = if hessian_at_trial {
-                system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]))
-            } else {
-                system.evaluate(y, &mut ws.g, None)
-            };
-            let trial = eval.merit.unwrap_or_else(|| norm(&ws.g));
-            // With an energy, a smaller residual counts only where the
-            // energy did not rise beyond its round-off (near the solution,
-            // where Armijo's decrease drowns in it); Armijo's condition
-            // counts on its own.
-            let (armijo, not_higher) = match (energy0, eval.energy) {
-                (Some(e0), Some(e1)) => (
-                    slope < 0.0 && e1 <= e0 + 1e-4 * alpha * slope,
-                    e1 <= e0 + 1e-12 * e0.abs(),
-                ),
-                _ => (false, true),
-            };
-            let smaller = trial <= (1.0 - 1e-4 * alpha) * residual && not_higher;
-            if (trial.is_finite() && (smaller || armijo)) || alpha <= shortest {
-                residual = trial;
-                break;
-            }
-            alpha *= 0.5;
-            // (A shortened step is accepted with a residual only.)
-            hessian_at_trial = false;
-        }
-        have_hessian = hessian_at_trial;
+        let alpha;
+        (alpha, residual, have_hessian) = backtrack(
+            system,
+            y,
+            ws,
+            &mut eval,
+            (energy0, slope),
+            residual,
+            hessian_at_trial,
+        );
         report.residuals.push(residual);
         increment = alpha * norm(&ws.dy) / length;
         report.increments.push(increment);
