@@ -369,6 +369,49 @@ fn backtrack(
     }
 }
 
+/// The Newton direction `ws.dy = -H^-1 G` with the Hessian and residual
+/// in `ws`, transformed by the system; `relative` is `|G| / |G_0|`.
+fn direction(
+    system: &mut impl NewtonSystem,
+    ws: &mut NewtonWorkspace,
+    report: &mut NewtonReport,
+    symmetric: bool,
+    relative: f64,
+) -> Result<(), NewtonError> {
+    for (d, g) in ws.dy.iter_mut().zip(&ws.g) {
+        *d = -g;
+    }
+    // Inexact Newton (Eisenstat & Walker 1996): Krylov solves need only
+    // reduce their residual as far as Newton's has fallen since the
+    // step's first iterate, so the tolerance is |G| / |G_0| (keeping
+    // quadratic convergence), between 1e-4 and 1e-12.
+    ws.linear.krylov_tolerance = relative.clamp(1e-12, 1e-4);
+    report.factorization = Some(ws.linear.solve(&ws.h, symmetric, &mut ws.dy)?);
+    system.transform_increment(&mut ws.dy);
+    Ok(())
+}
+
+/// Whether a Newton step of fraction `alpha` contracts fast enough for
+/// chord steps to follow: a full step at most a quarter of the one before
+/// (`increments`: before, now), or one that cut the residual a
+/// hundredfold (`residuals`: before, now) — the local regime where the
+/// Hessian changes little. Far from it a chord step can carry the iterate
+/// to another root (seen on an undamped swinging cloth whose elements
+/// approach SVK's compressive instability). The residual test catches the
+/// step after a linear phase: where wrinkling states or contacts switched
+/// between the first iterates, the second increment is only a few times
+/// smaller than the first, yet the residual falls by orders of magnitude
+/// and the next increment is at the tolerance. A step's first Newton step
+/// has no step before it, so only the residual test applies to it (an
+/// infinite "step before" once let chord steps follow every first
+/// iteration, to be rejected at once: docs/performance.md).
+fn contracts(alpha: f64, increments: (f64, f64), residuals: (f64, f64)) -> bool {
+    let ((previous, increment), (previous_residual, residual)) = (increments, residuals);
+    alpha == 1.0
+        && ((previous.is_finite() && increment <= 0.25 * previous)
+            || residual <= 0.01 * previous_residual)
+}
+
 /// Runs Newton from the first guess in `y` (overwritten by the solution).
 /// `length`: the reference length `|X|` of the convergence test (m).
 pub fn solve(
@@ -409,16 +452,8 @@ pub fn solve(
         if !have_hessian {
             eval = system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]));
         }
-        for (d, g) in ws.dy.iter_mut().zip(&ws.g) {
-            *d = -g;
-        }
-        // Inexact Newton (Eisenstat & Walker 1996): Krylov solves need only
-        // reduce their residual as far as Newton's has fallen since the
-        // step's first iterate, so the tolerance is |G| / |G_0| (keeping
-        // quadratic convergence), between 1e-4 and 1e-12.
-        ws.linear.krylov_tolerance = (residual / r0.max(f64::MIN_POSITIVE)).clamp(1e-12, 1e-4);
-        report.factorization = Some(ws.linear.solve(&ws.h, eval.symmetric, &mut ws.dy)?);
-        system.transform_increment(&mut ws.dy);
+        let relative = residual / r0.max(f64::MIN_POSITIVE);
+        direction(system, ws, &mut report, eval.symmetric, relative)?;
         // Backtracking on |G|: full steps as long as they reduce the
         // residual (always, near a solution); halved up to four times where
         // the residual is only piecewise smooth (contact entering and
@@ -477,23 +512,7 @@ pub fn solve(
             increment = f64::INFINITY;
             continue;
         }
-        // Chord steps only where Newton already contracts fast: a full
-        // step at most a quarter of the one before, or one that cut the
-        // residual a hundredfold — the local regime where the Hessian
-        // changes little. Far from it a chord step can carry the iterate
-        // to another root (seen on an undamped swinging cloth whose
-        // elements approach SVK's compressive instability). The residual
-        // test catches the step after a linear phase: where wrinkling
-        // states or contacts switched between the first iterates, the
-        // second increment is only a few times smaller than the first,
-        // yet the residual falls by orders of magnitude and the next
-        // increment is at the tolerance. A step's first Newton step has
-        // no step before it, so only the residual test applies to it
-        // (an infinite "step before" once let chord steps follow every
-        // first iteration, to be rejected at once: docs/performance.md).
-        if alpha == 1.0
-            && ((previous.is_finite() && increment <= 0.25 * previous)
-                || residual <= 0.01 * previous_residual)
+        if contracts(alpha, (previous, increment), (previous_residual, residual))
             && chord_steps(
                 system,
                 y,
