@@ -16,7 +16,7 @@ use drape::load::{Load, LoadKind};
 use drape::material::SaintVenantKirchhoff;
 use drape::mesh::ElementOrder;
 use drape::mesh::generate::{Pattern, rectangle};
-use drape::model::{MassKind, Model};
+use drape::model::Model;
 use drape::solver::LinearSolver;
 use std::hint::black_box;
 
@@ -33,7 +33,7 @@ fn fabric(n: usize) -> (Model, Vec<f64>) {
         let (node, _) = mesh.nearest_node(corner).unwrap();
         fixed[3 * node..3 * node + 3].fill(true);
     }
-    let model = Model::new(
+    let model = Model::builder(
         mesh,
         Box::new(SaintVenantKirchhoff::new(2.0e6, 0.3)),
         Section {
@@ -41,15 +41,15 @@ fn fabric(n: usize) -> (Model, Vec<f64>) {
             prestress: 0.0,
         },
         320.0,
-        vec![Load {
-            kind: LoadKind::Surface {
-                force: [0.0, 0.0, -1.8816],
-            },
-            ramp: None,
-        }],
-        fixed,
-        MassKind::Consistent,
     )
+    .loads(vec![Load {
+        kind: LoadKind::Surface {
+            force: [0.0, 0.0, -1.8816],
+        },
+        ramp: None,
+    }])
+    .fixed(fixed)
+    .build()
     .unwrap();
     // A deformed state: the cloth stretched 1 % and sagging, so every term
     // is non-trivial and the Hessian is positive definite (Cholesky).
@@ -67,7 +67,7 @@ fn benches(c: &mut Criterion) {
     for n in [20usize, 100, 300] {
         let (model, y) = fabric(n);
         let mut fi = vec![0.0; model.dofs()];
-        let mut h = vec![0.0; model.pattern.nnz()];
+        let mut h = vec![0.0; model.pattern().nnz()];
         group.bench_with_input(BenchmarkId::new("force+hessian", n), &n, |b, _| {
             b.iter(|| black_box(model.assemble(&y, &mut fi, Some(&mut h))))
         });
@@ -82,8 +82,9 @@ fn benches(c: &mut Criterion) {
         let (model, y) = fabric(n);
         let dofs = model.dofs();
         let (mut fi, fe) = (vec![0.0; dofs], vec![0.0; dofs]);
-        let mut h = vec![0.0; model.pattern.nnz()];
-        let mut linear = LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx).unwrap();
+        let mut h = vec![0.0; model.pattern().nnz()];
+        let mut linear =
+            LinearSolver::new(&model.pattern().col_ptr, &model.pattern().row_idx).unwrap();
         let c_mass = 1.0 / (1.0 * 1e-3 * 1e-3);
         group.bench_with_input(
             BenchmarkId::new("assemble+factorise+solve", n),

@@ -7,7 +7,7 @@ use drape::load::{Load, LoadKind};
 use drape::material::SaintVenantKirchhoff;
 use drape::mesh::ElementOrder;
 use drape::mesh::generate::{Pattern, rectangle};
-use drape::model::{MassKind, Model};
+use drape::model::Model;
 use drape::solver::LinearSolver;
 use std::time::Instant;
 
@@ -24,7 +24,7 @@ fn main() {
         [0.0; 3],
         ElementOrder::Linear,
     );
-    let model = Model::new(
+    let model = Model::builder(
         mesh,
         Box::new(SaintVenantKirchhoff::new(2.0e6, 0.3)),
         Section {
@@ -32,20 +32,19 @@ fn main() {
             prestress: 0.0,
         },
         320.0,
-        vec![Load {
-            kind: LoadKind::Surface {
-                force: [0.0, 0.0, -1.8816],
-            },
-            ramp: None,
-        }],
-        vec![],
-        MassKind::Consistent,
     )
+    .loads(vec![Load {
+        kind: LoadKind::Surface {
+            force: [0.0, 0.0, -1.8816],
+        },
+        ramp: None,
+    }])
+    .build()
     .unwrap();
     println!(
         "{n}x{n}: {} DOF, nnz {}, model set-up {:.3} s",
         model.dofs(),
-        model.pattern.nnz(),
+        model.pattern().nnz(),
         t0.elapsed().as_secs_f64()
     );
     let y: Vec<f64> = model
@@ -55,16 +54,16 @@ fn main() {
         .collect();
     let dofs = model.dofs();
     let (mut fi, fe) = (vec![0.0; dofs], vec![0.0; dofs]);
-    let mut h = vec![0.0; model.pattern.nnz()];
+    let mut h = vec![0.0; model.pattern().nnz()];
     let t = Instant::now();
-    let mut linear = LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx).unwrap();
+    let mut linear = LinearSolver::new(&model.pattern().col_ptr, &model.pattern().row_idx).unwrap();
     println!(
         "  solver set-up            {:.4} s",
         t.elapsed().as_secs_f64()
     );
     model.assemble(&y, &mut fi, Some(&mut h));
     model.add_mass_to_hessian(1e6, &mut h);
-    bare(&model.pattern.col_ptr, &model.pattern.row_idx, &h);
+    bare(&model.pattern().col_ptr, &model.pattern().row_idx, &h);
     block_lu(&model, &h);
     for round in 0..3 {
         let t = Instant::now();
@@ -88,7 +87,7 @@ fn main() {
 /// factorisation with symmetric and general values, one solve.
 fn block_lu(model: &Model, h: &[f64]) {
     use drape::solver::block_lu::BlockLu;
-    let (ptr, rows) = model.pattern.node_graph();
+    let (ptr, rows) = model.pattern().node_graph();
     let t = Instant::now();
     let mut lu = BlockLu::new(ptr, rows).unwrap();
     println!(

@@ -42,9 +42,9 @@ fn main() {
     }
     let y = &state.positions;
     let dofs = model.dofs();
-    let elements = model.mesh.element_count() as f64;
+    let elements = model.mesh().element_count() as f64;
     let mut fi = vec![0.0; dofs];
-    let mut h = vec![0.0; model.pattern.nnz()];
+    let mut h = vec![0.0; model.pattern().nnz()];
     let mut out = vec![0.0; dofs];
     println!("states: {:?}", model.state_fractions(y));
     for _ in 0..3 {
@@ -82,7 +82,7 @@ fn main() {
     // The block LU of the Hessian with the mass term of a 1e-4 s step.
     model.assemble(y, &mut fi, Some(&mut h));
     model.add_mass_to_hessian(1e8, &mut h);
-    let (ptr, rows) = model.pattern.node_graph();
+    let (ptr, rows) = model.pattern().node_graph();
     let mut lu = BlockLu::new(ptr, rows).unwrap();
     lu.factorize(&h, false).unwrap();
     let b: Vec<f64> = (0..dofs).map(|i| (i as f64 * 0.37).sin()).collect();
@@ -97,9 +97,9 @@ fn main() {
     }
     // The linear solver's overhead around factorisation and solve (the
     // residual check): both timed alternately, the median difference.
-    let mut linear = LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx)
+    let mut linear = LinearSolver::new(&model.pattern().col_ptr, &model.pattern().row_idx)
         .unwrap()
-        .with_transpose(model.pattern.transpose_map().to_vec())
+        .with_transpose(model.pattern().transpose_map().to_vec())
         .with_node_blocks(ptr, rows);
     for _ in 0..3 {
         let mut differences: Vec<f64> = (0..1000)

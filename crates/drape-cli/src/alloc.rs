@@ -4,9 +4,9 @@
 //! A million-element fabric keeps a few arrays of hundreds of megabytes
 //! (the Hessian's values, its 3x3-block copy, the multigrid levels) and
 //! first writes them during set-up and the first step. With 4 KiB pages
-//! the kernel takes one page fault per 4 KiB on that first write — about
-//! 950,000 faults in a 700x700 run, a fifth of its CPU time in the kernel
-//! clearing pages — and the memory-bound sparse products of every later
+//! the kernel takes one page fault per 4 KiB on that first write — a large
+//! share of a big run's CPU time in the kernel clearing pages
+//! (docs/performance.md, "Two rounds before") — and the memory-bound sparse products of every later
 //! Krylov iteration walk those arrays through a TLB that holds few 4 KiB
 //! pages. Where the system leaves transparent huge pages to `madvise`
 //! (`/sys/kernel/mm/transparent_hugepage/enabled` = `[madvise]`, the

@@ -296,18 +296,18 @@ fn check(path: &Path) -> Result<(), Failure> {
     println!("  title     {}", setup.title);
     println!(
         "  mesh      {} nodes, {} triangles of order {}, {} DOF ({} fixed)",
-        m.mesh.node_count(),
-        m.mesh.element_count(),
-        m.mesh.order.degree(),
+        m.mesh().node_count(),
+        m.mesh().element_count(),
+        m.mesh().order.degree(),
         m.dofs(),
         m.fixed_count()
     );
-    let mass_kind = match m.mass_kind {
+    let mass_kind = match m.mass_kind() {
         drape::model::MassKind::Consistent => "consistent",
         drape::model::MassKind::Lumped => "lumped",
     };
     println!("  mass      {:.6e} kg ({mass_kind})", m.total_mass());
-    println!("  loads     {}", m.loads.len());
+    println!("  loads     {}", m.loads().len());
     match &setup.analysis {
         drape::scenario::Analysis::Dynamic { newmark, segments } => {
             let steps: usize = segments.iter().map(|s| s.0).sum();
@@ -351,7 +351,9 @@ fn check(path: &Path) -> Result<(), Failure> {
     for mon in &setup.monitors {
         println!(
             "  monitor   {} -> node {} at {:?}",
-            mon.name, mon.node, m.mesh.nodes[mon.node]
+            mon.name,
+            mon.node,
+            m.mesh().nodes[mon.node]
         );
     }
     Ok(())
@@ -375,22 +377,7 @@ fn run(
     };
     let (path, setup) = match (&scenario, &resume) {
         (Some(p), None) => (p.clone(), load(p)?),
-        (_, Some(dir)) => {
-            let loaded = scenario
-                .clone()
-                .map_or_else(|| started_with(dir), Ok)
-                .and_then(|p| {
-                    // A changed or missing input file is named as such, before
-                    // the scenario reads it.
-                    simulation::check_resume_inputs(dir).map_err(|e| Failure::Input(e.into()))?;
-                    let setup = load(&p)?;
-                    Ok((p, setup))
-                });
-            match loaded {
-                Ok(loaded) => loaded,
-                Err(failure) => return Err(record_refusal(dir, failure)),
-            }
-        }
+        (_, Some(dir)) => load_to_resume(scenario.clone(), dir)?,
         (None, None) => unreachable!("clap requires one of them"),
     };
     // From here on (the directory is about to be written) a signal no
@@ -414,106 +401,10 @@ fn run(
     if resume.is_none() {
         directory::clear_previous_outputs(&lock, &out, Some(path))
             .map_err(|e| Failure::Input(e.into()))?;
-        // Remember the scenario, for --resume and for readers of the outputs.
-        let copy = out.join("scenario.toml");
-        std::fs::create_dir_all(&out)
-            .and_then(|()| {
-                // Never copy a file onto itself (that would truncate it).
-                let same = std::fs::canonicalize(path).ok() == std::fs::canonicalize(&copy).ok();
-                if same {
-                    Ok(())
-                } else {
-                    std::fs::copy(path, &copy).map(|_| ())
-                }
-            })
-            .and_then(|()| {
-                let abs = std::fs::canonicalize(path)?;
-                // The path's own bytes: a name that is not UTF-8 must be
-                // found again by --resume.
-                std::fs::write(out.join("scenario.path"), path_bytes(&abs))
-            })
-            .with_context(|| format!("cannot write into {}", out.display()))
-            .map_err(|e| {
-                // The directory is drape's: its summary says why.
-                let message = format!("{e:#}");
-                match simulation::record_failure(&out, Some(&setup), false, &message) {
-                    Ok(()) => Failure::Run(e),
-                    Err(s) => Failure::Run(e.context(format!(
-                        "and {} could not be written: {s}",
-                        out.join("summary.json").display()
-                    ))),
-                }
-            })?;
+        remember_scenario(path, &out, &setup)?;
     }
-    let terminal = std::io::stderr().is_terminal();
     let start = Instant::now();
-    let mut last_print = Instant::now();
-    // Progress in scheduled steps: they, not simulated time, cost the
-    // wall time; adaptive steps are not known in advance, so there it is
-    // simulated time, in thousandths of the schedule.
-    let adaptive = setup.adaptive.is_some();
-    let bar = (terminal && !quiet).then(|| {
-        let bar = ProgressBar::new(1000);
-        let template = if adaptive {
-            "{bar:30.cyan/blue} {percent}% of the time, t = {msg} [{elapsed_precise} elapsed, {eta} left]"
-        } else {
-            "{bar:30.cyan/blue} {pos}/{len} steps, t = {msg} [{elapsed_precise} elapsed, {eta} left]"
-        };
-        bar.set_style(
-            ProgressStyle::with_template(template)
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        bar
-    });
-    let mut observer = |info: &StepInfo| {
-        if quiet {
-            return;
-        }
-        let line = format!(
-            "step {:>6}  t = {:.5e} / {:.4e} s  dt = {:.2e}  Newton {:>2}{}  KE {:.3e} J  SE {:.3e} J",
-            info.step,
-            info.time,
-            info.end_time,
-            info.dt,
-            info.iterations,
-            if info.cutbacks > 0 {
-                format!("  (cut back x{})", info.cutbacks)
-            } else {
-                String::new()
-            },
-            info.kinetic_energy,
-            info.strain_energy
-        );
-        if let Some(bar) = &bar {
-            if adaptive {
-                let fraction = (info.time / info.end_time).clamp(0.0, 1.0);
-                bar.set_position((1000.0 * fraction) as u64);
-            } else {
-                bar.set_length(info.scheduled_total as u64);
-                bar.set_position(info.scheduled_done as u64);
-            }
-            bar.set_message(format!(
-                "{:.4e} s, step {}, Newton {}{}",
-                info.time,
-                info.step,
-                info.iterations,
-                if info.cutbacks > 0 {
-                    format!(", cut back x{}", info.cutbacks)
-                } else {
-                    String::new()
-                }
-            ));
-            if verbose {
-                bar.println(&line);
-            }
-        } else if verbose
-            || last_print.elapsed().as_secs_f64() >= 1.0
-            || info.time >= info.end_time * (1.0 - 1e-12)
-        {
-            eprintln!("{line}");
-            last_print = Instant::now();
-        }
-    };
+    let mut progress = Progress::new(quiet, verbose, setup.adaptive.is_some());
     for warning in simulation::warnings(&setup) {
         eprintln!("warning: {warning}");
     }
@@ -521,36 +412,14 @@ fn run(
         stop: Some(&signals::STOP),
         resume: resume.is_some(),
     };
-    let result = simulation::run_with(&setup, &out, &mut observer, control);
-    if let Some(bar) = &bar {
+    let result = simulation::run_with(&setup, &out, &mut |info| progress.step(info), control);
+    if let Some(bar) = &progress.bar {
         bar.finish_and_clear();
     }
     match result {
         Ok(summary) => {
             if !quiet {
-                if summary.at_rest == Some(true) {
-                    println!("{}", summary.message);
-                }
-                println!(
-                    "completed {} {} to t = {:.6} s in {:.2} s ({} Newton iterations, {} cut-back steps)",
-                    summary.steps,
-                    if summary.steps == 1 { "step" } else { "steps" },
-                    summary.time,
-                    start.elapsed().as_secs_f64(),
-                    summary.newton_iterations,
-                    summary.cutbacks
-                );
-                println!(
-                    "energy: kinetic {:.6e} J + strain {:.6e} J - work of loads {:.6e} J = {:.6e} J",
-                    summary.kinetic_energy,
-                    summary.strain_energy,
-                    summary.external_work,
-                    summary.kinetic_energy + summary.strain_energy - summary.external_work
-                );
-                for (name, p) in &summary.monitors {
-                    println!("monitor {name}: [{:.6}, {:.6}, {:.6}]", p[0], p[1], p[2]);
-                }
-                println!("results in {}", out.display());
+                print_completed(&summary, start, &out);
             }
             Ok(())
         }
@@ -563,6 +432,179 @@ fn run(
             ),
         }),
     }
+}
+
+/// The scenario a resume of `dir` goes on with (`scenario`, or the one
+/// the run started with) and its setup; a refusal is recorded in the
+/// directory's summary.
+fn load_to_resume(scenario: Option<PathBuf>, dir: &Path) -> Result<(PathBuf, Setup), Failure> {
+    let loaded = scenario
+        .map_or_else(|| started_with(dir), Ok)
+        .and_then(|p| {
+            // A changed or missing input file is named as such, before
+            // the scenario reads it.
+            simulation::check_resume_inputs(dir).map_err(|e| Failure::Input(e.into()))?;
+            let setup = load(&p)?;
+            Ok((p, setup))
+        });
+    loaded.map_err(|failure| record_refusal(dir, failure))
+}
+
+/// Copies the scenario at `path` into `out` (for --resume and for readers
+/// of the outputs) with its absolute path; a failure is recorded in the
+/// directory's summary.
+fn remember_scenario(path: &Path, out: &Path, setup: &Setup) -> Result<(), Failure> {
+    let copy = out.join("scenario.toml");
+    std::fs::create_dir_all(out)
+        .and_then(|()| {
+            // Never copy a file onto itself (that would truncate it).
+            let same = std::fs::canonicalize(path).ok() == std::fs::canonicalize(&copy).ok();
+            if same {
+                Ok(())
+            } else {
+                std::fs::copy(path, &copy).map(|_| ())
+            }
+        })
+        .and_then(|()| {
+            let abs = std::fs::canonicalize(path)?;
+            // The path's own bytes: a name that is not UTF-8 must be
+            // found again by --resume.
+            std::fs::write(out.join("scenario.path"), path_bytes(&abs))
+        })
+        .with_context(|| format!("cannot write into {}", out.display()))
+        .map_err(|e| {
+            // The directory is drape's: its summary says why.
+            let message = format!("{e:#}");
+            match simulation::record_failure(out, Some(setup), false, &message) {
+                Ok(()) => Failure::Run(e),
+                Err(s) => Failure::Run(e.context(format!(
+                    "and {} could not be written: {s}",
+                    out.join("summary.json").display()
+                ))),
+            }
+        })
+}
+
+/// What a run shows of its progress: a bar on a terminal (with each
+/// step's line when `verbose`), else a line a second (each step's when
+/// `verbose`), nothing when `quiet`.
+struct Progress {
+    bar: Option<ProgressBar>,
+    quiet: bool,
+    verbose: bool,
+    /// Progress in simulated time rather than in scheduled steps.
+    adaptive: bool,
+    last_print: Instant,
+}
+
+impl Progress {
+    fn new(quiet: bool, verbose: bool, adaptive: bool) -> Self {
+        let terminal = std::io::stderr().is_terminal();
+        // Progress in scheduled steps: they, not simulated time, cost the
+        // wall time; adaptive steps are not known in advance, so there it is
+        // simulated time, in thousandths of the schedule.
+        let bar = (terminal && !quiet).then(|| {
+            let bar = ProgressBar::new(1000);
+            let template = if adaptive {
+                "{bar:30.cyan/blue} {percent}% of the time, t = {msg} [{elapsed_precise} elapsed, {eta} left]"
+            } else {
+                "{bar:30.cyan/blue} {pos}/{len} steps, t = {msg} [{elapsed_precise} elapsed, {eta} left]"
+            };
+            bar.set_style(
+                ProgressStyle::with_template(template)
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            bar
+        });
+        Self {
+            bar,
+            quiet,
+            verbose,
+            adaptive,
+            last_print: Instant::now(),
+        }
+    }
+
+    /// After each converged step.
+    fn step(&mut self, info: &StepInfo) {
+        if self.quiet {
+            return;
+        }
+        let cut_back = |separator: &str| {
+            if info.cutbacks > 0 {
+                format!("{separator}cut back x{}", info.cutbacks)
+            } else {
+                String::new()
+            }
+        };
+        let line = format!(
+            "step {:>6}  t = {:.5e} / {:.4e} s  dt = {:.2e}  Newton {:>2}{}  KE {:.3e} J  SE {:.3e} J",
+            info.step,
+            info.time,
+            info.end_time,
+            info.dt,
+            info.iterations,
+            if info.cutbacks > 0 {
+                format!("  ({})", cut_back(""))
+            } else {
+                String::new()
+            },
+            info.kinetic_energy,
+            info.strain_energy
+        );
+        if let Some(bar) = &self.bar {
+            if self.adaptive {
+                let fraction = (info.time / info.end_time).clamp(0.0, 1.0);
+                bar.set_position((1000.0 * fraction) as u64);
+            } else {
+                bar.set_length(info.scheduled_total as u64);
+                bar.set_position(info.scheduled_done as u64);
+            }
+            bar.set_message(format!(
+                "{:.4e} s, step {}, Newton {}{}",
+                info.time,
+                info.step,
+                info.iterations,
+                cut_back(", ")
+            ));
+            if self.verbose {
+                bar.println(&line);
+            }
+        } else if self.verbose
+            || self.last_print.elapsed().as_secs_f64() >= 1.0
+            || info.time >= info.end_time * (1.0 - 1e-12)
+        {
+            eprintln!("{line}");
+            self.last_print = Instant::now();
+        }
+    }
+}
+
+/// What a completed run prints: rest, steps, energy balance, monitors.
+fn print_completed(summary: &simulation::Summary, start: Instant, out: &Path) {
+    if summary.at_rest == Some(true) {
+        println!("{}", summary.message);
+    }
+    println!(
+        "completed {} {} to t = {:.6} s in {:.2} s ({} Newton iterations, {} cut-back steps)",
+        summary.steps,
+        if summary.steps == 1 { "step" } else { "steps" },
+        summary.time,
+        start.elapsed().as_secs_f64(),
+        summary.newton_iterations,
+        summary.cutbacks
+    );
+    println!(
+        "energy: kinetic {:.6e} J + strain {:.6e} J - work of loads {:.6e} J = {:.6e} J",
+        summary.kinetic_energy,
+        summary.strain_energy,
+        summary.external_work,
+        summary.kinetic_energy + summary.strain_energy - summary.external_work
+    );
+    for (name, p) in &summary.monitors {
+        println!("monitor {name}: [{:.6}, {:.6}, {:.6}]", p[0], p[1], p[2]);
+    }
+    println!("results in {}", out.display());
 }
 
 /// A resume refused after its directory was locked: the refusal goes into

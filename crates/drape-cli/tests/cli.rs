@@ -1365,7 +1365,7 @@ const BAD_INPUTS: &[BadInput] = &[
     },
     BadInput {
         file: "unknown_mesh_extension.toml",
-        fragments: &["`mesh.path`", "unknown mesh format"],
+        fragments: &["`mesh.path`", "obstacle.ply: unknown mesh format"],
         line: Some(6),
     },
     BadInput {

@@ -54,9 +54,7 @@ pub fn scenario_error(py: Python<'_>, e: &ScenarioError, from_dict: bool) -> PyE
             Some(key.clone()),
             format!("`{key}` {message}"),
         ),
-        ScenarioError::Mesh { file, message } => {
-            (Some(file), None, None, format!("mesh: {message}"))
-        }
+        ScenarioError::Mesh { file, error } => (Some(file), None, None, format!("mesh: {error}")),
         other => (None, None, None, other.to_string()),
     };
     let line = line.filter(|_| !from_dict);

@@ -201,9 +201,9 @@ pub fn check<'py>(py: Python<'py>, scenario: &Bound<'py, PyAny>) -> PyResult<Bou
     let m = &setup.model;
     let info = PyDict::new(py);
     info.set_item("title", &setup.title)?;
-    info.set_item("nodes", m.mesh.node_count())?;
-    info.set_item("elements", m.mesh.element_count())?;
-    info.set_item("order", m.mesh.order.degree())?;
+    info.set_item("nodes", m.mesh().node_count())?;
+    info.set_item("elements", m.mesh().element_count())?;
+    info.set_item("order", m.mesh().order.degree())?;
     info.set_item("dofs", m.dofs())?;
     info.set_item("fixed_dofs", m.fixed_count())?;
     info.set_item("mass", m.total_mass())?;

@@ -47,6 +47,7 @@
 #![warn(missing_docs)]
 
 mod anim;
+mod colorbar;
 mod colormap;
 mod error;
 mod field;

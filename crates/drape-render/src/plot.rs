@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Once;
 
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -177,20 +178,7 @@ pub fn plot_image_with(
             "plot size {width}x{height}: width must be 320–10000 and height 240–10000 pixels"
         )));
     }
-    let dir = if dir.extension().is_some_and(|e| e == "pvd") {
-        dir.parent().unwrap_or(Path::new("."))
-    } else {
-        dir
-    };
-    if !dir.is_dir() {
-        return Err(RenderError::io(
-            dir,
-            std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                "not a directory (expected a drape output directory)",
-            ),
-        ));
-    }
+    let dir = output_dir(dir)?;
     let hist = History::read(dir)?;
     let path = dir.join("history.csv");
     check_columns(dir, &hist)?;
@@ -201,141 +189,11 @@ pub fn plot_image_with(
     if time.is_empty() {
         return Err(RenderError::format(&path, "no rows to plot"));
     }
-    let summary = std::fs::read_to_string(dir.join("summary.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
-    let note = summary
-        .as_ref()
-        .filter(|v| v.get("at_rest").and_then(serde_json::Value::as_bool) == Some(true))
-        .and_then(|v| v.get("message")?.as_str().map(str::to_owned));
-    let title = summary
-        .as_ref()
-        .and_then(|v| v.get("title")?.as_str().map(str::to_owned))
-        .unwrap_or_else(|| {
-            dir.file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default()
-        });
+    let (title, note) = title_and_note(dir);
     register_fonts();
-
     let monitors = hist.monitors();
-    let col = |name: &str| hist.column(name).map(<[f64]>::to_vec);
-    let mut panels: Vec<Panel> = Vec::new();
-
-    let mut mon = Panel::new("Monitored nodes: height", "z (m)");
-    for (k, name) in monitors.iter().enumerate() {
-        if let Some(z) = col(&format!("{name}_z")) {
-            mon.series.push(Series::line(name, z, palette(k)));
-        }
-    }
-    if mon.series.is_empty() {
-        mon.empty_note = Some("no [[monitor]] in the scenario".to_owned());
-    }
-    panels.push(mon);
-
-    let mut en = Panel::new("Energies", "energy (J)");
-    for (k, (c, label)) in [
-        ("kinetic_energy", "kinetic"),
-        ("strain_energy", "strain"),
-        ("contact_energy", "contact (penalty)"),
-        ("external_work", "work of the loads"),
-        ("total_energy", "total = K + U + C − W"),
-    ]
-    .iter()
-    .enumerate()
-    {
-        if let Some(v) = col(c) {
-            if *c == "contact_energy" && v.iter().all(|&x| x == 0.0) {
-                continue;
-            }
-            let mut s = Series::line(label, v, palette(k));
-            if *c == "total_energy" {
-                s.dashed = true;
-                s.color = RGBColor(30, 30, 30);
-            }
-            en.series.push(s);
-        }
-    }
-    panels.push(en);
-
-    let mut it = Panel::new("Newton iterations per step", "iterations");
-    if let Some(step) = col("step") {
-        it.x = Some(("step", step));
-    }
-    if let Some(v) = col("iterations") {
-        let mut s = Series::line("iterations", v, palette(0));
-        s.points = true;
-        it.series.push(s);
-        it.integer_y = true;
-    }
-    if let Some(c) = col("cutbacks")
-        && c.iter().any(|&x| x > 0.0)
-    {
-        it.series.push(Series {
-            name: "cutbacks (step halvings)".to_owned(),
-            values: c,
-            color: RGBColor(214, 39, 40),
-            dashed: false,
-            points: true,
-            skip_zero: true,
-        });
-    }
-    it.legend = it.series.len() > 1;
-    panels.push(it);
-
-    let has_obstacles = col("min_gap").is_some_and(|v| v.iter().any(|x| x.is_finite()));
-    let mut cf = Panel::new("Contact force (resultant on the fabric)", "force (N)");
-    match col("contact_force") {
-        Some(v) if has_obstacles => cf.series.push(Series::line("contact force", v, palette(0))),
-        _ => cf.empty_note = Some("no obstacles".to_owned()),
-    }
-    cf.legend = false;
-    panels.push(cf);
-
-    let mut ws = Panel::new("Wrinkling state (fraction of elements)", "fraction");
-    for (k, (c, label)) in [
-        ("taut_fraction", "taut"),
-        ("wrinkled_fraction", "wrinkled"),
-        ("slack_fraction", "slack"),
-    ]
-    .iter()
-    .enumerate()
-    {
-        if let Some(v) = col(c) {
-            let [r, g, b] = WRINKLE_COLOURS[k];
-            ws.series.push(Series::line(label, v, RGBColor(r, g, b)));
-        }
-    }
-    ws.fixed_y = Some((0.0, 1.0));
-    if ws.series.is_empty() {
-        ws.empty_note = Some("no state fractions in history.csv".to_owned());
-    }
-    panels.push(ws);
-
-    let mut gap = Panel::new("Smallest gap to an obstacle", "gap (m)");
-    if let Some(v) = col("min_gap")
-        && has_obstacles
-    {
-        gap.series.push(Series::line("min gap", v, palette(0)));
-        gap.zero_line = true;
-    } else {
-        gap.empty_note = Some("no obstacles".to_owned());
-    }
-    gap.legend = false;
-    panels.push(gap);
-
-    for e in extra {
-        let mut p = Panel::new(&e.title, &e.y_label);
-        p.x = Some(("time (s)", e.time.clone()));
-        for (k, (name, values)) in e.series.iter().enumerate() {
-            p.series
-                .push(Series::line(name, values.clone(), palette(k)));
-        }
-        p.integer_y = e.integer;
-        p.legend = e.series.len() > 1;
-        panels.push(p);
-    }
-
+    let mut panels = history_panels(&hist, &monitors);
+    panels.extend(extra.iter().map(extra_panel));
     let titles: Vec<String> = panels.iter().map(|p| p.title.clone()).collect();
     let (bw, bh) = (width * SS, height * SS);
     let mut buf = vec![255u8; bw as usize * bh as usize * 3];
@@ -360,6 +218,193 @@ pub fn plot_image_with(
         note,
     };
     Ok((img, report))
+}
+
+/// The output directory `dir` names (the directory of a `.pvd` given
+/// instead), which must be a directory.
+fn output_dir(dir: &Path) -> Result<&Path> {
+    let dir = if dir.extension().is_some_and(|e| e == "pvd") {
+        dir.parent().unwrap_or(Path::new("."))
+    } else {
+        dir
+    };
+    if !dir.is_dir() {
+        return Err(RenderError::io(
+            dir,
+            std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "not a directory (expected a drape output directory)",
+            ),
+        ));
+    }
+    Ok(dir)
+}
+
+/// The figure's title (the summary's, else the directory's name) and
+/// its note: the summary's message when the run ended at rest.
+fn title_and_note(dir: &Path) -> (String, Option<String>) {
+    let summary = std::fs::read_to_string(dir.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+    let note = summary
+        .as_ref()
+        .filter(|v| v.get("at_rest").and_then(serde_json::Value::as_bool) == Some(true))
+        .and_then(|v| v.get("message")?.as_str().map(str::to_owned));
+    let title = summary
+        .as_ref()
+        .and_then(|v| v.get("title")?.as_str().map(str::to_owned))
+        .unwrap_or_else(|| {
+            dir.file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        });
+    (title, note)
+}
+
+/// The panels of a history, in order: the monitors' heights, the
+/// energies, Newton's iterations, the contact force, the wrinkling state
+/// and the smallest gap.
+fn history_panels(hist: &History, monitors: &[String]) -> Vec<Panel> {
+    let has_obstacles = column(hist, "min_gap").is_some_and(|v| v.iter().any(|x| x.is_finite()));
+    vec![
+        monitor_panel(hist, monitors),
+        energy_panel(hist),
+        iteration_panel(hist),
+        contact_force_panel(hist, has_obstacles),
+        wrinkling_panel(hist),
+        gap_panel(hist, has_obstacles),
+    ]
+}
+
+/// The column `name` of `hist`, if it has one.
+fn column(hist: &History, name: &str) -> Option<Vec<f64>> {
+    hist.column(name).map(<[f64]>::to_vec)
+}
+
+fn monitor_panel(hist: &History, monitors: &[String]) -> Panel {
+    let mut mon = Panel::new("Monitored nodes: height", "z (m)");
+    for (k, name) in monitors.iter().enumerate() {
+        if let Some(z) = column(hist, &format!("{name}_z")) {
+            mon.series.push(Series::line(name, z, palette(k)));
+        }
+    }
+    if mon.series.is_empty() {
+        mon.empty_note = Some("no [[monitor]] in the scenario".to_owned());
+    }
+    mon
+}
+
+fn energy_panel(hist: &History) -> Panel {
+    let mut en = Panel::new("Energies", "energy (J)");
+    for (k, (c, label)) in [
+        ("kinetic_energy", "kinetic"),
+        ("strain_energy", "strain"),
+        ("contact_energy", "contact (penalty)"),
+        ("external_work", "work of the loads"),
+        ("total_energy", "total = K + U + C − W"),
+    ]
+    .iter()
+    .enumerate()
+    {
+        if let Some(v) = column(hist, c) {
+            if *c == "contact_energy" && v.iter().all(|&x| x == 0.0) {
+                continue;
+            }
+            let mut s = Series::line(label, v, palette(k));
+            if *c == "total_energy" {
+                s.dashed = true;
+                s.color = RGBColor(30, 30, 30);
+            }
+            en.series.push(s);
+        }
+    }
+    en
+}
+
+fn iteration_panel(hist: &History) -> Panel {
+    let mut it = Panel::new("Newton iterations per step", "iterations");
+    if let Some(step) = column(hist, "step") {
+        it.x = Some(("step", step));
+    }
+    if let Some(v) = column(hist, "iterations") {
+        let mut s = Series::line("iterations", v, palette(0));
+        s.points = true;
+        it.series.push(s);
+        it.integer_y = true;
+    }
+    if let Some(c) = column(hist, "cutbacks")
+        && c.iter().any(|&x| x > 0.0)
+    {
+        it.series.push(Series {
+            name: "cutbacks (step halvings)".to_owned(),
+            values: c,
+            color: RGBColor(214, 39, 40),
+            dashed: false,
+            points: true,
+            skip_zero: true,
+        });
+    }
+    it.legend = it.series.len() > 1;
+    it
+}
+
+fn contact_force_panel(hist: &History, has_obstacles: bool) -> Panel {
+    let mut cf = Panel::new("Contact force (resultant on the fabric)", "force (N)");
+    match column(hist, "contact_force") {
+        Some(v) if has_obstacles => cf.series.push(Series::line("contact force", v, palette(0))),
+        _ => cf.empty_note = Some("no obstacles".to_owned()),
+    }
+    cf.legend = false;
+    cf
+}
+
+fn wrinkling_panel(hist: &History) -> Panel {
+    let mut ws = Panel::new("Wrinkling state (fraction of elements)", "fraction");
+    for (k, (c, label)) in [
+        ("taut_fraction", "taut"),
+        ("wrinkled_fraction", "wrinkled"),
+        ("slack_fraction", "slack"),
+    ]
+    .iter()
+    .enumerate()
+    {
+        if let Some(v) = column(hist, c) {
+            let [r, g, b] = WRINKLE_COLOURS[k];
+            ws.series.push(Series::line(label, v, RGBColor(r, g, b)));
+        }
+    }
+    ws.fixed_y = Some((0.0, 1.0));
+    if ws.series.is_empty() {
+        ws.empty_note = Some("no state fractions in history.csv".to_owned());
+    }
+    ws
+}
+
+fn gap_panel(hist: &History, has_obstacles: bool) -> Panel {
+    let mut gap = Panel::new("Smallest gap to an obstacle", "gap (m)");
+    if let Some(v) = column(hist, "min_gap")
+        && has_obstacles
+    {
+        gap.series.push(Series::line("min gap", v, palette(0)));
+        gap.zero_line = true;
+    } else {
+        gap.empty_note = Some("no obstacles".to_owned());
+    }
+    gap.legend = false;
+    gap
+}
+
+/// A caller's panel against time.
+fn extra_panel(e: &ExtraPanel) -> Panel {
+    let mut p = Panel::new(&e.title, &e.y_label);
+    p.x = Some(("time (s)", e.time.clone()));
+    for (k, (name, values)) in e.series.iter().enumerate() {
+        p.series
+            .push(Series::line(name, values.clone(), palette(k)));
+    }
+    p.integer_y = e.integer;
+    p.legend = e.series.len() > 1;
+    p
 }
 
 fn palette(k: usize) -> RGBColor {
@@ -566,6 +611,40 @@ fn draw_panel<DB: DrawingBackend>(
             },
         )))?;
     }
+    draw_series(&mut chart, p, time, px)?;
+    if p.legend && !p.series.is_empty() {
+        chart
+            .configure_series_labels()
+            .position(legend_corner(p, time, (t0, t1), (y0, y1)))
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(190, 190, 190))
+            .label_font(label_font)
+            .legend_area_size(px(30.0) as i32)
+            .margin(px(8.0))
+            .draw()?;
+    }
+    if let Some(note) = &p.empty_note {
+        let style = ("sans-serif", px(15.0) as f64)
+            .into_font()
+            .color(&RGBColor(120, 120, 120))
+            .pos(Pos::new(HPos::Center, VPos::Center));
+        chart.plotting_area().draw(&Text::new(
+            note.clone(),
+            (0.5 * (t0 + t1), 0.5 * (y0 + y1)),
+            style,
+        ))?;
+    }
+    Ok(())
+}
+
+/// The series of panel `p` against `time` on `chart`: dots, a dashed
+/// line or a solid one, each with its legend entry.
+fn draw_series<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    p: &Panel,
+    time: &[f64],
+    px: &dyn Fn(f64) -> u32,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     let stroke = px(1.8);
     for s in &p.series {
         let style = ShapeStyle {
@@ -601,28 +680,6 @@ fn draw_panel<DB: DrawingBackend>(
         let len = px(22.0) as i32;
         anno.label(s.name.as_str())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + len, y)], legend_style));
-    }
-    if p.legend && !p.series.is_empty() {
-        chart
-            .configure_series_labels()
-            .position(legend_corner(p, time, (t0, t1), (y0, y1)))
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(190, 190, 190))
-            .label_font(label_font)
-            .legend_area_size(px(30.0) as i32)
-            .margin(px(8.0))
-            .draw()?;
-    }
-    if let Some(note) = &p.empty_note {
-        let style = ("sans-serif", px(15.0) as f64)
-            .into_font()
-            .color(&RGBColor(120, 120, 120))
-            .pos(Pos::new(HPos::Center, VPos::Center));
-        chart.plotting_area().draw(&Text::new(
-            note.clone(),
-            (0.5 * (t0 + t1), 0.5 * (y0 + y1)),
-            style,
-        ))?;
     }
     Ok(())
 }

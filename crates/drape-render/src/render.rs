@@ -3,9 +3,10 @@
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
-use crate::colormap::{ColorMap, WRINKLE_COLOURS};
+use crate::colorbar::Colorbar;
+use crate::colormap::ColorMap;
 use crate::error::{RenderError, Result};
-use crate::field::{Field, FieldValues, WRINKLE_STATES, format_value};
+use crate::field::{Field, FieldValues, WRINKLE_STATES};
 use crate::geom::{Aabb, V3, add, cross, normalize, obstacle_triangles, sub};
 use crate::image::RgbImage;
 use crate::outdir::{FrameEntry, FrameSelect, OutputDir};
@@ -453,11 +454,11 @@ struct Scene {
 
 /// Sizes of the annotations of a figure `w` x `h`.
 #[derive(Debug, Clone, Copy)]
-struct Metrics {
-    pad: f32,
-    title_px: f32,
-    sub_px: f32,
-    label_px: f32,
+pub(crate) struct Metrics {
+    pub(crate) pad: f32,
+    pub(crate) title_px: f32,
+    pub(crate) sub_px: f32,
+    pub(crate) label_px: f32,
 }
 
 impl Metrics {
@@ -588,7 +589,7 @@ impl Scene {
             frames: idx.iter().map(|&i| self.frames[i].entry.clone()).collect(),
             field: opts.field,
             range: self.range,
-            colorbar_labels: self.colorbar_labels(opts.field),
+            colorbar_labels: self.colorbar(opts.field).labels(),
             caption: opts.field.label(),
             obstacles: self.obstacles.len(),
             notices: self.notices.clone(),
@@ -596,21 +597,13 @@ impl Scene {
         }
     }
 
-    fn colorbar_labels(&self, field: Field) -> Vec<String> {
-        if field.is_categorical() {
-            return WRINKLE_STATES.iter().map(|s| (*s).to_owned()).collect();
+    /// The colour bar of `field` on the scene's scale.
+    fn colorbar(&self, field: Field) -> Colorbar<'_> {
+        Colorbar {
+            field,
+            range: self.range,
+            cmap: &self.cmap,
         }
-        let (a, b) = self.range;
-        if a == b {
-            return vec![format_value(a), format_value(b)];
-        }
-        (0..=4)
-            .map(|k| match k {
-                0 => format_value(a),
-                4 => format_value(b),
-                _ => format_value(a + (b - a) * k as f64 / 4.0),
-            })
-            .collect()
     }
 
     fn time_label(&self, t: f64) -> String {
@@ -778,153 +771,13 @@ impl Scene {
         y2 + m.pad * 0.8
     }
 
-    /// Width of the colour bar band for `field`.
-    fn colorbar_band_width(&self, field: Field, m: &Metrics) -> f32 {
-        let labels = self.colorbar_labels(field);
-        let lw = labels
-            .iter()
-            .map(|l| text::width(l, m.label_px, Weight::Regular))
-            .fold(0.0, f32::max);
-        let bar = (m.label_px * 1.2).round();
-        let caption = text::width(&field.label(), m.label_px, Weight::Bold);
-        m.pad + caption.max(bar + m.label_px * 0.8 + lw) + m.pad
-    }
-
-    /// Draws the colour bar (or the wrinkle legend) in the band starting at
-    /// `x0`, vertically centred on `[y0, y1]`.
-    fn draw_colorbar(
-        &self,
-        img: &mut RgbImage,
-        field: Field,
-        m: &Metrics,
-        x0: f32,
-        y0: f32,
-        y1: f32,
-    ) {
-        let labels = self.colorbar_labels(field);
-        let caption = field.label();
-        let dark = [30, 30, 30];
-        let bx = (x0 + m.pad).round();
-        let bw = (m.label_px * 1.2).round();
-        if field.is_categorical() {
-            let row = m.label_px * 1.8;
-            let total = m.label_px * 1.6 + row * WRINKLE_STATES.len() as f32;
-            let mut y = 0.5 * (y0 + y1) - 0.5 * total;
-            text::draw(
-                img,
-                &caption,
-                (bx, y + m.label_px),
-                &text::Pen {
-                    px: m.label_px,
-                    weight: Weight::Bold,
-                    color: dark,
-                },
-                Align::Left,
-            );
-            y += m.label_px * 1.6;
-            for (k, name) in WRINKLE_STATES.iter().enumerate() {
-                let sw = m.label_px * 1.1;
-                img.fill_rect(
-                    bx as i64 - 1,
-                    (y + 0.2 * row) as i64 - 1,
-                    sw as i64 + 2,
-                    sw as i64 + 2,
-                    [90, 90, 90],
-                );
-                img.fill_rect(
-                    bx as i64,
-                    (y + 0.2 * row) as i64,
-                    sw as i64,
-                    sw as i64,
-                    WRINKLE_COLOURS[k],
-                );
-                text::draw(
-                    img,
-                    name,
-                    (
-                        bx + sw + m.label_px * 0.6,
-                        y + 0.2 * row + sw * 0.5 + text::ascent(m.label_px) * 0.38,
-                    ),
-                    &text::Pen {
-                        px: m.label_px,
-                        weight: Weight::Regular,
-                        color: dark,
-                    },
-                    Align::Left,
-                );
-                y += row;
-            }
-            return;
-        }
-        let h = ((y1 - y0) * 0.62).max(40.0);
-        let top = (0.5 * (y0 + y1) - 0.5 * h + m.label_px).round();
-        let bottom = (top + h).round();
-        text::draw(
-            img,
-            &caption,
-            (bx, top - m.label_px * 0.9),
-            &text::Pen {
-                px: m.label_px,
-                weight: Weight::Bold,
-                color: dark,
-            },
-            Align::Left,
-        );
-        for y in top as i64..bottom as i64 {
-            let t = (bottom as f64 - 0.5 - y as f64) / (bottom - top - 1.0).max(1.0) as f64;
-            img.fill_rect(bx as i64, y, bw as i64, 1, self.cmap.color_at_fraction(t));
-        }
-        let grey = [90, 90, 90];
-        img.fill_rect(bx as i64 - 1, top as i64 - 1, bw as i64 + 2, 1, grey);
-        img.fill_rect(bx as i64 - 1, bottom as i64, bw as i64 + 2, 1, grey);
-        img.fill_rect(
-            bx as i64 - 1,
-            top as i64 - 1,
-            1,
-            (bottom - top) as i64 + 2,
-            grey,
-        );
-        img.fill_rect(
-            (bx + bw) as i64,
-            top as i64 - 1,
-            1,
-            (bottom - top) as i64 + 2,
-            grey,
-        );
-        let n = labels.len();
-        for (k, label) in labels.iter().enumerate() {
-            let frac = if n > 1 {
-                k as f32 / (n - 1) as f32
-            } else {
-                0.5
-            };
-            let y = bottom - 0.5 - frac * (bottom - top - 1.0);
-            let tick = (m.label_px * 0.3).round() as i64;
-            img.fill_rect((bx + bw) as i64, y.round() as i64, tick, 1, grey);
-            text::draw(
-                img,
-                label,
-                (
-                    bx + bw + m.label_px * 0.6,
-                    y + text::ascent(m.label_px) * 0.36,
-                ),
-                &text::Pen {
-                    px: m.label_px,
-                    weight: Weight::Regular,
-                    color: dark,
-                },
-                Align::Left,
-            );
-        }
-    }
-
     /// Layout and camera of single-frame figures, shared by every frame of
     /// the scene (so that an animation keeps still).
     fn single_layout(&self, opts: &RenderOptions) -> SingleLayout {
         let (w, h) = (opts.width, opts.height);
         let m = Metrics::new(w, h);
         let top = m.pad + m.title_px * 0.95 + m.sub_px * 1.5 + m.pad * 0.8;
-        let band = self.colorbar_band_width(opts.field, &m);
+        let band = self.colorbar(opts.field).band_width(&m);
         let pw = (w as f32 - band - m.pad).max(16.0) as usize;
         let ph = (h as f32 - top - m.pad).max(16.0) as usize;
         let ss = opts.supersample as f64;
@@ -968,7 +821,8 @@ impl Scene {
             stroke(&mut img, &pixels, c.color, width, c.dashed);
         }
         let x0 = w as f32 - l.band;
-        self.draw_colorbar(&mut img, opts.field, &l.m, x0, l.top, h as f32 - l.m.pad);
+        self.colorbar(opts.field)
+            .draw(&mut img, &l.m, x0, l.top, h as f32 - l.m.pad);
         img
     }
 
@@ -987,7 +841,7 @@ impl Scene {
             self.time_label(last.time).trim_start_matches("t = ")
         );
         let top = self.draw_title(&mut img, &m, &subtitle);
-        let band = self.colorbar_band_width(opts.field, &m);
+        let band = self.colorbar(opts.field).band_width(&m);
         let area_w = w as f32 - band - m.pad;
         let area_h = h as f32 - top - m.pad;
         // The number of columns that shows the figures largest.
@@ -1042,7 +896,8 @@ impl Scene {
             img.fill_rect(px0 + pw as i64 - 1, py0, 1, ph as i64, grey);
         }
         let x0 = w as f32 - band;
-        self.draw_colorbar(&mut img, opts.field, &m, x0, top, h as f32 - m.pad);
+        self.colorbar(opts.field)
+            .draw(&mut img, &m, x0, top, h as f32 - m.pad);
         img
     }
 }

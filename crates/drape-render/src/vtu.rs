@@ -296,48 +296,124 @@ fn decode(ty: &str, bytes: &[u8]) -> Vec<f64> {
 /// As [`read_vtu`].
 pub fn parse_vtu(path: &Path, bytes: &[u8]) -> Result<Frame> {
     let err = |m: String| RenderError::format(path, m);
-    let marker = b"<AppendedData";
-    let app = find(bytes, marker).ok_or_else(|| {
-        err(
-            "no <AppendedData> block (only raw appended VTU files, as drape writes, are read)"
-                .into(),
-        )
-    })?;
-    let header = std::str::from_utf8(&bytes[..app])
-        .map_err(|_| err("the XML header is not UTF-8".into()))?;
-    if !header.contains("type=\"UnstructuredGrid\"") {
-        return Err(err("not a VTK UnstructuredGrid file".into()));
+    let appended = Appended::find(path, bytes)?;
+    let (n_points, n_cells) = piece_sizes(path, appended.header)?;
+    let arrays = read_arrays(path, &appended)?;
+    let (pvals, pcomp) = arrays.points.ok_or_else(|| err("no Points array".into()))?;
+    if pcomp != 3 || pvals.len() != 3 * n_points {
+        return Err(err(format!(
+            "Points: expected {n_points} points of 3 components, got {} values of {pcomp}",
+            pvals.len()
+        )));
     }
-    if header.contains("byte_order=\"BigEndian\"") {
-        return Err(err("big-endian files are not supported".into()));
+    let points: Vec<[f64; 3]> = pvals.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let conn = arrays
+        .connectivity
+        .ok_or_else(|| err("no connectivity array".into()))?;
+    let offs = arrays
+        .offsets
+        .ok_or_else(|| err("no offsets array".into()))?;
+    let types_f = arrays.types.ok_or_else(|| err("no types array".into()))?;
+    if offs.len() != n_cells || types_f.len() != n_cells {
+        return Err(err(format!(
+            "expected {n_cells} cells, got {} offsets and {} types",
+            offs.len(),
+            types_f.len()
+        )));
     }
-    if header.contains("compressor=") {
-        return Err(err("compressed files are not supported".into()));
+    let connectivity = point_indices(path, &conn, n_points)?;
+    let (offsets, types) = cells(path, &offs, &types_f, connectivity.len())?;
+    for (arrays, count, kind) in [
+        (&arrays.point_data, n_points, "point"),
+        (&arrays.cell_data, n_cells, "cell"),
+    ] {
+        for a in arrays {
+            if a.values.len() != a.components * count {
+                return Err(err(format!(
+                    "{kind} array {:?}: {} values for {count} tuples of {} components",
+                    a.name,
+                    a.values.len(),
+                    a.components
+                )));
+            }
+        }
     }
-    let header_bytes = if header.contains("header_type=\"UInt32\"") {
-        4
-    } else {
-        8
-    };
-    let app_tag_end = bytes[app..]
-        .iter()
-        .position(|&b| b == b'>')
-        .map(|p| app + p)
-        .ok_or_else(|| err("unterminated <AppendedData> tag".into()))?;
-    let app_tag = String::from_utf8_lossy(&bytes[app..app_tag_end]);
-    if !app_tag.contains("encoding=\"raw\"") {
-        return Err(err(
-            "the appended data is not raw (only encoding=\"raw\" is read)".into(),
-        ));
-    }
-    let underscore = bytes[app_tag_end..]
-        .iter()
-        .position(|&b| b == b'_')
-        .map(|p| app_tag_end + p)
-        .ok_or_else(|| err("no '_' marker opening the appended data".into()))?;
-    let data = &bytes[underscore + 1..];
+    Ok(Frame {
+        path: path.to_owned(),
+        time: arrays.time,
+        points,
+        connectivity,
+        offsets,
+        types,
+        point_data: arrays.point_data,
+        cell_data: arrays.cell_data,
+    })
+}
 
-    // Piece sizes.
+/// A raw appended VTU file taken apart: the XML header before
+/// `<AppendedData`, the appended block after its `_`, and the byte size
+/// of the block's counts.
+struct Appended<'a> {
+    header: &'a str,
+    data: &'a [u8],
+    header_bytes: usize,
+}
+
+impl<'a> Appended<'a> {
+    /// Checks that `bytes` is a little-endian, uncompressed
+    /// UnstructuredGrid with raw appended data, and finds its parts.
+    fn find(path: &Path, bytes: &'a [u8]) -> Result<Self> {
+        let err = |m: String| RenderError::format(path, m);
+        let marker = b"<AppendedData";
+        let app = find(bytes, marker).ok_or_else(|| {
+            err(
+                "no <AppendedData> block (only raw appended VTU files, as drape writes, are read)"
+                    .into(),
+            )
+        })?;
+        let header = std::str::from_utf8(&bytes[..app])
+            .map_err(|_| err("the XML header is not UTF-8".into()))?;
+        if !header.contains("type=\"UnstructuredGrid\"") {
+            return Err(err("not a VTK UnstructuredGrid file".into()));
+        }
+        if header.contains("byte_order=\"BigEndian\"") {
+            return Err(err("big-endian files are not supported".into()));
+        }
+        if header.contains("compressor=") {
+            return Err(err("compressed files are not supported".into()));
+        }
+        let header_bytes = if header.contains("header_type=\"UInt32\"") {
+            4
+        } else {
+            8
+        };
+        let app_tag_end = bytes[app..]
+            .iter()
+            .position(|&b| b == b'>')
+            .map(|p| app + p)
+            .ok_or_else(|| err("unterminated <AppendedData> tag".into()))?;
+        let app_tag = String::from_utf8_lossy(&bytes[app..app_tag_end]);
+        if !app_tag.contains("encoding=\"raw\"") {
+            return Err(err(
+                "the appended data is not raw (only encoding=\"raw\" is read)".into(),
+            ));
+        }
+        let underscore = bytes[app_tag_end..]
+            .iter()
+            .position(|&b| b == b'_')
+            .map(|p| app_tag_end + p)
+            .ok_or_else(|| err("no '_' marker opening the appended data".into()))?;
+        Ok(Self {
+            header,
+            data: &bytes[underscore + 1..],
+            header_bytes,
+        })
+    }
+}
+
+/// `NumberOfPoints` and `NumberOfCells` of the header's `<Piece>`.
+fn piece_sizes(path: &Path, header: &str) -> Result<(usize, usize)> {
+    let err = |m: String| RenderError::format(path, m);
     let piece_at = header
         .find("<Piece")
         .ok_or_else(|| err("no <Piece> element".into()))?;
@@ -352,18 +428,28 @@ pub fn parse_vtu(path: &Path, bytes: &[u8]) -> Result<Frame> {
             .and_then(|(_, v)| v.trim().parse().ok())
             .ok_or_else(|| err(format!("<Piece> has no valid {key}")))
     };
-    let n_points = piece_num("NumberOfPoints")?;
-    let n_cells = piece_num("NumberOfCells")?;
+    Ok((piece_num("NumberOfPoints")?, piece_num("NumberOfCells")?))
+}
 
-    let tags = parse_header(path, header)?;
-    let mut time = None;
-    let mut points = None;
-    let mut connectivity = None;
-    let mut offsets = None;
-    let mut types = None;
-    let mut point_data = Vec::new();
-    let mut cell_data = Vec::new();
-    for tag in &tags {
+/// Every array of a file as read, before the sizes are checked.
+#[derive(Default)]
+struct Arrays {
+    time: Option<f64>,
+    /// The values and their components.
+    points: Option<(Vec<f64>, usize)>,
+    connectivity: Option<Vec<f64>>,
+    offsets: Option<Vec<f64>>,
+    types: Option<Vec<f64>>,
+    point_data: Vec<Array>,
+    cell_data: Vec<Array>,
+}
+
+/// The header's `DataArray`s, their values read from the appended block
+/// (and the field data `TIME` from the header).
+fn read_arrays(path: &Path, appended: &Appended) -> Result<Arrays> {
+    let err = |m: String| RenderError::format(path, m);
+    let mut arrays = Arrays::default();
+    for tag in &parse_header(path, appended.header)? {
         let name = tag.get("Name").unwrap_or("").to_owned();
         let ty = tag
             .get("type")
@@ -387,7 +473,7 @@ pub fn parse_vtu(path: &Path, bytes: &[u8]) -> Result<Frame> {
                     .next()
                     .and_then(|s| s.parse().ok())
                     .ok_or_else(|| err(format!("field data TIME {text:?} is not a number")))?;
-                time = Some(t);
+                arrays.time = Some(t);
             }
             continue;
         }
@@ -401,18 +487,19 @@ pub fn parse_vtu(path: &Path, bytes: &[u8]) -> Result<Frame> {
             .get("offset")
             .and_then(|o| o.trim().parse().ok())
             .ok_or_else(|| err(format!("array {name:?} has no valid offset")))?;
+        let (data, header_bytes) = (appended.data, appended.header_bytes);
         let values = read_block(path, data, offset, header_bytes, size, ty, &name)?;
         match (tag.section, name.as_str()) {
-            (Section::Points, _) => points = Some((values, components)),
-            (Section::Cells, "connectivity") => connectivity = Some(values),
-            (Section::Cells, "offsets") => offsets = Some(values),
-            (Section::Cells, "types") => types = Some(values),
-            (Section::PointData, _) => point_data.push(Array {
+            (Section::Points, _) => arrays.points = Some((values, components)),
+            (Section::Cells, "connectivity") => arrays.connectivity = Some(values),
+            (Section::Cells, "offsets") => arrays.offsets = Some(values),
+            (Section::Cells, "types") => arrays.types = Some(values),
+            (Section::PointData, _) => arrays.point_data.push(Array {
                 name,
                 components,
                 values,
             }),
-            (Section::CellData, _) => cell_data.push(Array {
+            (Section::CellData, _) => arrays.cell_data.push(Array {
                 name,
                 components,
                 values,
@@ -420,40 +507,40 @@ pub fn parse_vtu(path: &Path, bytes: &[u8]) -> Result<Frame> {
             _ => {}
         }
     }
+    Ok(arrays)
+}
 
-    let (pvals, pcomp) = points.ok_or_else(|| err("no Points array".into()))?;
-    if pcomp != 3 || pvals.len() != 3 * n_points {
-        return Err(err(format!(
-            "Points: expected {n_points} points of 3 components, got {} values of {pcomp}",
-            pvals.len()
-        )));
-    }
-    let points: Vec<[f64; 3]> = pvals.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-    let conn = connectivity.ok_or_else(|| err("no connectivity array".into()))?;
-    let offs = offsets.ok_or_else(|| err("no offsets array".into()))?;
-    let types_f = types.ok_or_else(|| err("no types array".into()))?;
-    if offs.len() != n_cells || types_f.len() != n_cells {
-        return Err(err(format!(
-            "expected {n_cells} cells, got {} offsets and {} types",
-            offs.len(),
-            types_f.len()
-        )));
-    }
+/// The connectivity as indices: each a whole number below `n_points`.
+fn point_indices(path: &Path, conn: &[f64], n_points: usize) -> Result<Vec<usize>> {
     let mut connectivity = Vec::with_capacity(conn.len());
-    for &v in &conn {
+    for &v in conn {
         if !(v >= 0.0 && v < n_points as f64 && v.fract() == 0.0) {
-            return Err(err(format!(
-                "connectivity holds {v}, not a point index below {n_points}"
-            )));
+            return Err(RenderError::format(
+                path,
+                format!("connectivity holds {v}, not a point index below {n_points}"),
+            ));
         }
         connectivity.push(v as usize);
     }
-    let mut offsets = Vec::with_capacity(n_cells + 1);
+    Ok(connectivity)
+}
+
+/// The cells' offsets (from 0, ending at the connectivity's `length`)
+/// and types: each a triangle of order 1, 2 or 3 with its number of
+/// nodes.
+fn cells(
+    path: &Path,
+    offs: &[f64],
+    types_f: &[f64],
+    length: usize,
+) -> Result<(Vec<usize>, Vec<u8>)> {
+    let err = |m: String| RenderError::format(path, m);
+    let mut offsets = Vec::with_capacity(offs.len() + 1);
     offsets.push(0usize);
-    let mut types = Vec::with_capacity(n_cells);
-    for (c, (&o, &t)) in offs.iter().zip(&types_f).enumerate() {
+    let mut types = Vec::with_capacity(offs.len());
+    for (c, (&o, &t)) in offs.iter().zip(types_f).enumerate() {
         let prev = *offsets.last().expect("non-empty");
-        if !(o >= prev as f64 && o <= conn.len() as f64) {
+        if !(o >= prev as f64 && o <= length as f64) {
             return Err(err(format!("cell {c}: offset {o} out of order or range")));
         }
         let o = o as usize;
@@ -477,38 +564,13 @@ pub fn parse_vtu(path: &Path, bytes: &[u8]) -> Result<Frame> {
         offsets.push(o);
         types.push(t);
     }
-    if offsets.last() != Some(&connectivity.len()) {
+    if offsets.last() != Some(&length) {
         return Err(err(format!(
-            "the offsets end at {}, the connectivity has {} entries",
+            "the offsets end at {}, the connectivity has {length} entries",
             offsets.last().unwrap_or(&0),
-            connectivity.len()
         )));
     }
-    for (arrays, count, kind) in [
-        (&point_data, n_points, "point"),
-        (&cell_data, n_cells, "cell"),
-    ] {
-        for a in arrays {
-            if a.values.len() != a.components * count {
-                return Err(err(format!(
-                    "{kind} array {:?}: {} values for {count} tuples of {} components",
-                    a.name,
-                    a.values.len(),
-                    a.components
-                )));
-            }
-        }
-    }
-    Ok(Frame {
-        path: path.to_owned(),
-        time,
-        points,
-        connectivity,
-        offsets,
-        types,
-        point_data,
-        cell_data,
-    })
+    Ok((offsets, types))
 }
 
 fn read_block(

@@ -2,12 +2,12 @@
 //! helper thread that spins for the next task.
 //!
 //! The loops of a small model (the 20x20 pedestal: 800 elements, 441
-//! nodes) take 10–100 µs each, a few thousand times per run. Handing such
-//! a loop to rayon costs more than it saves on a virtual machine: an idle
-//! rayon worker goes to sleep after a few dozen yields, and waking it
-//! (a futex and an interrupt to a halted virtual CPU) took about 15 µs
-//! per `join` here, against 0.1–0.5 µs for a thread that spins
-//! (`docs/performance.md`). [`join`] hands its second closure to one
+//! nodes) are short and run thousands of times per run. Handing such a
+//! loop to rayon costs more than it saves on a virtual machine: an idle
+//! rayon worker goes to sleep after a few dozen yields, and waking it (a
+//! futex and an interrupt to a halted virtual CPU) costs more than the
+//! loop, where a thread that spins takes the task at once (the figures:
+//! docs/performance.md, "The round before"). [`join`] hands its second closure to one
 //! helper thread that spins for up to [`SPIN`] after its last task and
 //! then parks, so a run keeps it awake and an idle process costs nothing.
 //!
@@ -27,7 +27,8 @@ use std::thread::{self, Thread};
 use std::time::{Duration, Instant};
 
 /// How long the helper spins for a task after its last one before it
-/// parks (a Newton iteration of the pedestal takes about 0.5 ms).
+/// parks: longer than a Newton iteration of a small model, so that a run
+/// keeps it awake from one iteration to the next.
 pub const SPIN: Duration = Duration::from_millis(2);
 
 /// A task published to the helper: the closure's state and how to run it.

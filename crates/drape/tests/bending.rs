@@ -49,7 +49,7 @@ fn model(
         },
         ramp: None,
     };
-    Model::new(
+    Model::builder(
         mesh,
         Box::new(SaintVenantKirchhoff::new(young, 0.3)),
         Section {
@@ -57,11 +57,12 @@ fn model(
             prestress: 0.0,
         },
         rho,
-        vec![load],
-        fixed,
-        MassKind::Lumped,
     )
-    .and_then(|m| m.with_bending(rigidity))
+    .loads(vec![load])
+    .fixed(fixed)
+    .mass(MassKind::Lumped)
+    .bending(rigidity)
+    .build()
     .unwrap()
 }
 
@@ -237,7 +238,7 @@ fn strip_rolled_into_a_cylinder_stores_the_closed_form_energy() {
             .chunks(3)
             .flat_map(|x| [r * (x[0] / r).sin(), x[1], r * (1.0 - (x[0] / r).cos())])
             .collect();
-        let energy = m.bending.as_ref().unwrap().energy(&y);
+        let energy = m.bending().unwrap().energy(&y);
         let e = (energy - exact) / exact;
         eprintln!(
             "{order:?}, {n} divisions along: {energy:.6e} J against {exact:.6e} J ({:+.3} %)",
@@ -365,7 +366,7 @@ fn curved_meshes_stay_at_rest() {
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
         assert!(moved < 1e-9, "{name}: moved {moved:e} m");
-        let bending = m.bending.as_ref().unwrap();
+        let bending = m.bending().unwrap();
         assert_eq!(bending.energy(&x), 0.0);
         let flattened: Vec<f64> = x.chunks(3).flat_map(|p| [p[0], p[1], 0.0]).collect();
         assert!(bending.energy(&flattened) > 0.0, "{name}");

@@ -262,7 +262,7 @@ fn bending_on_a_non_manifold_mesh_names_the_edge_and_its_elements() {
 fn zero_rigidity_builds_the_model_without_bending() {
     let path = Path::new("test.toml");
     let plain = build(&scenario("", ""), path).unwrap();
-    assert!(plain.model.bending.is_none());
+    assert!(plain.model.bending().is_none());
     let membrane = format!("{:?}", plain.model);
     for zero in [
         "bending_rigidity = 0.0",
@@ -270,7 +270,7 @@ fn zero_rigidity_builds_the_model_without_bending() {
         "bending_rigidity = { warp = 0.0, weft = 0 }",
     ] {
         let setup = build(&scenario(zero, ""), path).unwrap();
-        assert!(setup.model.bending.is_none(), "{zero}");
+        assert!(setup.model.bending().is_none(), "{zero}");
         // The same model, value for value (Debug prints each f64 so that
         // it reads back to the same bits).
         assert_eq!(format!("{:?}", setup.model), membrane, "{zero}");
@@ -284,7 +284,7 @@ fn zero_rigidity_builds_the_model_without_bending() {
         path,
     )
     .unwrap();
-    assert!(setup.model.bending.is_none());
+    assert!(setup.model.bending().is_none());
 }
 
 #[test]
@@ -294,7 +294,7 @@ fn good_rigidities_build_their_bending() {
         build(&scenario(r, d), path)
             .unwrap()
             .model
-            .bending
+            .bending()
             .expect("bending")
             .rigidity
     };

@@ -419,10 +419,10 @@ fn example_setup(example: &str) -> drape::scenario::Setup {
 /// Largest distance between a node's final position mapped by a symmetry
 /// of the mesh pattern and the final position of the node it maps to.
 fn asymmetry(s: &drape::scenario::Setup, y: &[f64], map: impl Fn([f64; 3]) -> [f64; 3]) -> f64 {
-    let nodes = &s.model.mesh.nodes;
+    let nodes = &s.model.mesh().nodes;
     let mut worst = 0.0f64;
     for (p, x) in nodes.iter().enumerate() {
-        let (q, d) = s.model.mesh.nearest_node(map(*x)).unwrap();
+        let (q, d) = s.model.mesh().nearest_node(map(*x)).unwrap();
         assert!(d < 1e-12, "the pattern is not symmetric under this map");
         let image = map([y[3 * p], y[3 * p + 1], y[3 * p + 2]]);
         let e = (0..3)
@@ -449,7 +449,7 @@ fn lagrange_keeps_every_active_gap_closed_and_reports_symmetry() {
         "fabric-on-pedestal.toml",
     ] {
         let s = example_setup(example);
-        let contact = s.model.contact.as_ref().unwrap();
+        let contact = s.model.contact().unwrap();
         let mut worst_gap = 0.0f64;
         let mut steps_with_contact = 0;
         let state = drive(&s, |st| {
@@ -565,11 +565,11 @@ fn node_on_an_edge_and_a_corner_behaves_the_same_with_both_methods() {
         );
         let (c, _) = sl
             .model
-            .mesh
+            .mesh()
             .nearest_node([center[0], center[1], -0.0499])
             .unwrap();
         let yc = [yl[3 * c], yl[3 * c + 1], yl[3 * c + 2]];
-        let prox = sl.model.contact.as_ref().unwrap().bodies[0].proximity(yc, 0.0, None);
+        let prox = sl.model.contact().unwrap().bodies[0].proximity(yc, 0.0, None);
         assert!(
             prox.gap >= -1e-9,
             "{center:?}: centre node gap {}",

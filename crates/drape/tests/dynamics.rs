@@ -16,7 +16,7 @@ use drape::simulation::{reference_length, run};
 use drape::solver::NewtonSettings;
 
 fn model(mesh: Mesh, loads: Vec<Load>, fixed: Vec<bool>, mass: MassKind) -> Model {
-    Model::new(
+    Model::builder(
         mesh,
         Box::new(SaintVenantKirchhoff::new(2.0e6, 0.3)),
         Section {
@@ -24,10 +24,11 @@ fn model(mesh: Mesh, loads: Vec<Load>, fixed: Vec<bool>, mass: MassKind) -> Mode
             prestress: 0.0,
         },
         320.0,
-        loads,
-        fixed,
-        mass,
     )
+    .loads(loads)
+    .fixed(fixed)
+    .mass(mass)
+    .build()
     .unwrap()
 }
 
@@ -124,7 +125,7 @@ fn free_fall_is_exact_for_any_newmark_parameters() {
                 assert!(1.0 - state.persistence < 1e-12, "{order:?} beta {beta}");
             }
             let t = state.time;
-            for (i, x) in m.mesh.nodes.iter().enumerate() {
+            for (i, x) in m.mesh().nodes.iter().enumerate() {
                 let z = state.positions[3 * i + 2];
                 assert!(
                     (z - (x[2] - 0.5 * g * t * t)).abs() < 1e-13,
@@ -168,13 +169,13 @@ fn assembled_hessian_matches_finite_differences_of_the_residual() {
         };
         let dense = |y: &[f64]| {
             let (mut fi, mut fe) = (vec![0.0; n], vec![0.0; n]);
-            let mut h = vec![0.0; m.pattern.nnz()];
+            let mut h = vec![0.0; m.pattern().nnz()];
             m.assemble(y, &mut fi, Some(&mut h));
             m.add_pressure(y, 40.0, &mut fe, Some(&mut h));
             let mut d = vec![0.0; n * n];
             for c in 0..n {
-                for k in m.pattern.col_ptr[c]..m.pattern.col_ptr[c + 1] {
-                    d[m.pattern.row_idx[k] * n + c] = h[k];
+                for k in m.pattern().col_ptr[c]..m.pattern().col_ptr[c + 1] {
+                    d[m.pattern().row_idx[k] * n + c] = h[k];
                 }
             }
             d

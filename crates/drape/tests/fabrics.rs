@@ -26,11 +26,11 @@ fn every_fabric_of_the_library_builds() {
         let setup = common::build(&text, &file).unwrap_or_else(|e| panic!("{e}"));
         let model = &setup.model;
         assert!(
-            model.material.axis().is_some(),
+            model.material().axis().is_some(),
             "{}: not orthotropic",
             file.display()
         );
-        assert!(model.bending.is_some(), "{}: no bending", file.display());
-        assert!(model.contact.is_some(), "{}: no pedestal", file.display());
+        assert!(model.bending().is_some(), "{}: no bending", file.display());
+        assert!(model.contact().is_some(), "{}: no pedestal", file.display());
     }
 }

@@ -145,7 +145,7 @@ fn flat_disc_at_step_0_measures_dc_one() {
         let mut scenario = scenario.clone();
         scenario.mesh.order = Some(order);
         let setup = scenario.build(&path, &source).unwrap();
-        let mesh = &setup.model.mesh;
+        let mesh = setup.model.mesh();
         let tester = DrapeTester::find(Some(&scenario), mesh, 0.0, Given::default()).unwrap();
         assert_eq!(tester.pedestal_radius, R_P);
         assert_eq!(tester.specimen_radius, R);

@@ -17,7 +17,7 @@ use drape::fd::{gradient_error, jacobian_error};
 use drape::material::{Material, Orthotropic, WrinkleState, WrinklingModel};
 use drape::mesh::generate::{Pattern, rectangle};
 use drape::mesh::{ElementOrder, Mesh};
-use drape::model::{MassKind, Model};
+use drape::model::Model;
 
 const E1: f64 = 5.0e6;
 const E2: f64 = 1.0e6;
@@ -34,16 +34,10 @@ fn fabric(warp: [f64; 3]) -> Orthotropic {
 }
 
 fn model(mesh: Mesh, material: Box<dyn Material>, fixed: Vec<bool>) -> Model {
-    Model::new(
-        mesh,
-        material,
-        SECTION,
-        320.0,
-        vec![],
-        fixed,
-        MassKind::Consistent,
-    )
-    .unwrap()
+    Model::builder(mesh, material, SECTION, 320.0)
+        .fixed(fixed)
+        .build()
+        .unwrap()
 }
 
 /// The uniaxial modulus at `phi` from the warp:
@@ -84,7 +78,7 @@ fn uniaxial(phi: f64, order: ElementOrder) -> (f64, f64) {
     let (y, _, _) = equilibrium_with(&m, y0, 0);
     let mut f = vec![0.0; 3 * nn];
     m.assemble(&y, &mut f, None);
-    let nodes = &m.mesh.nodes;
+    let nodes = &m.mesh().nodes;
     let end: f64 = (0..nn)
         .filter(|&i| nodes[i][0] > l - 1e-12)
         .map(|i| f[3 * i])
@@ -191,7 +185,7 @@ fn picture_frame_shear_gives_the_shear_modulus() {
         let mut f = vec![0.0; 3 * nn];
         m.assemble(&y, &mut f, None);
         let top: f64 = (0..nn)
-            .filter(|&i| m.mesh.nodes[i][1] > size - 1e-12)
+            .filter(|&i| m.mesh().nodes[i][1] > size - 1e-12)
             .map(|i| f[3 * i])
             .sum();
         // Corner nodes carry part of the side's force too: the top edge's
@@ -702,7 +696,7 @@ fn bad_orthotropic_input_names_the_key_line_and_value() {
         std::path::Path::new("t.toml"),
     )
     .unwrap();
-    assert!(setup.model.bending.is_some());
+    assert!(setup.model.bending().is_some());
 }
 
 /// In-plane shear of a woven square into a tension field: the boundary of

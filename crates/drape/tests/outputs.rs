@@ -184,7 +184,7 @@ fn an_interrupted_run_has_its_checkpointed_frames_on_disk_and_resumes_exactly() 
     assert!(summary.contains("\"interrupted\""), "{summary}");
 
     let bytes = std::fs::read(checkpoint_path(&out)).unwrap();
-    let bodies = s.model.contact.as_ref().map_or(0, |c| c.bodies.len());
+    let bodies = s.model.contact().map_or(0, |c| c.bodies.len());
     let ck = Checkpoint::from_bytes(&bytes, s.model.dofs(), bodies, s.scenario_hash).unwrap();
     let steps = check_collection(&out, "fields");
     assert_eq!(steps, [0, 3, 6, 9, 12]);

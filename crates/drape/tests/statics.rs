@@ -9,7 +9,7 @@ use common::equilibrium_with;
 use drape::material::SaintVenantKirchhoff;
 use drape::mesh::generate::{Pattern, rectangle};
 use drape::mesh::{ElementOrder, Mesh};
-use drape::model::{MassKind, Model};
+use drape::model::Model;
 
 const ORDERS: [ElementOrder; 3] = [
     ElementOrder::Linear,
@@ -21,7 +21,7 @@ const NU: f64 = 0.3;
 const T: f64 = 6e-4;
 
 fn model(mesh: Mesh, fixed: Vec<bool>) -> Model {
-    Model::new(
+    Model::builder(
         mesh,
         Box::new(SaintVenantKirchhoff::new(YOUNG, NU)),
         Section {
@@ -29,10 +29,9 @@ fn model(mesh: Mesh, fixed: Vec<bool>) -> Model {
             prestress: 0.0,
         },
         320.0,
-        vec![],
-        fixed,
-        MassKind::Consistent,
     )
+    .fixed(fixed)
+    .build()
     .unwrap()
 }
 
@@ -89,7 +88,7 @@ fn patch_test_uniform_stretch_is_reproduced_exactly() {
         }
         let m = model(mesh, fixed);
         let mut y0 = exact.clone();
-        for i in 0..m.mesh.node_count() {
+        for i in 0..m.mesh().node_count() {
             if boundary.binary_search(&i).is_err() {
                 y0[3 * i] += 0.02 * (i as f64).sin();
                 y0[3 * i + 1] -= 0.015 * (i as f64).cos();
@@ -133,7 +132,7 @@ fn rigid_motion_gives_zero_strain_and_force() {
             [0, 1, 2].map(|i| v[i] * c + x[i] * s + a[i] * d * (1.0 - c))
         };
         let y: Vec<f64> = m
-            .mesh
+            .mesh()
             .nodes
             .iter()
             .flat_map(|x| {
@@ -211,11 +210,11 @@ fn uniaxial_and_equibiaxial_stretch_match_the_closed_form() {
                 );
             }
             // End force: sum of internal forces on the nodes at x = L.
-            let nn = m.mesh.node_count();
+            let nn = m.mesh().node_count();
             let mut fi = vec![0.0; 3 * nn];
             m.assemble(&y, &mut fi, None);
             let end: f64 = (0..nn)
-                .filter(|&i| m.mesh.nodes[i][0] > l - 1e-12)
+                .filter(|&i| m.mesh().nodes[i][0] > l - 1e-12)
                 .map(|i| fi[3 * i])
                 .sum();
             let expected = lambda * s11 * T * w;
@@ -226,12 +225,12 @@ fn uniaxial_and_equibiaxial_stretch_match_the_closed_form() {
             if !biaxial {
                 let width_stretch = (1.0 - NU * (lambda * lambda - 1.0)).sqrt();
                 let top = (0..nn)
-                    .find(|&i| m.mesh.nodes[i][1] > w - 1e-12 && m.mesh.nodes[i][0] > 0.4 * l)
+                    .find(|&i| m.mesh().nodes[i][1] > w - 1e-12 && m.mesh().nodes[i][0] > 0.4 * l)
                     .unwrap();
                 let bottom = (0..nn)
                     .find(|&i| {
-                        m.mesh.nodes[i][1] < 1e-12
-                            && (m.mesh.nodes[i][0] - m.mesh.nodes[top][0]).abs() < 1e-12
+                        m.mesh().nodes[i][1] < 1e-12
+                            && (m.mesh().nodes[i][0] - m.mesh().nodes[top][0]).abs() < 1e-12
                     })
                     .unwrap();
                 let width = y[3 * top + 1] - y[3 * bottom + 1];

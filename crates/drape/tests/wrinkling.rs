@@ -316,10 +316,10 @@ fn the_persistence_predictor_saves_newton_iterations_on_the_pedestal() {
         "persistence {adaptive}, constant acceleration {constant}"
     );
     for at in [[0.0, 0.0], [0.1, 0.0], [0.0, 0.1], [-0.1, 0.0], [0.0, -0.1]] {
-        let node = (0..model.mesh.nodes.len())
+        let node = (0..model.mesh().nodes.len())
             .min_by(|&a, &b| {
                 let d = |n: usize| {
-                    let x = model.mesh.nodes[n];
+                    let x = &model.mesh().nodes[n];
                     (x[0] - at[0]).powi(2) + (x[1] - at[1]).powi(2)
                 };
                 d(a).total_cmp(&d(b))

@@ -26,8 +26,8 @@ from ._drape import RunResult, __version__, check, run
 from ._errors import DrapeError, OutputError, RunError, ScenarioError, SweepError
 
 # Not `typing.TYPE_CHECKING`: importing typing costs more than the rest of
-# `import drape` (about 5 ms of an interpreter's start, 20 ms in a busy
-# hour); type checkers read this name the same way.
+# `import drape` (docs/performance.md, "Python"); type checkers read this
+# name the same way.
 TYPE_CHECKING = False
 
 if TYPE_CHECKING:

@@ -350,7 +350,7 @@ impl Bending {
 
     /// Records where each patch's Hessian blocks lie in `pattern` (which
     /// must include the stencils).
-    pub fn attach(&mut self, pattern: &SparsePattern, parallel: bool) {
+    pub(crate) fn attach(&mut self, pattern: &SparsePattern, parallel: bool) {
         self.blocks.clear();
         self.block_start.clear();
         self.colours = if parallel {
@@ -372,8 +372,9 @@ impl Bending {
     }
 
     /// Adds the bending energy's gradient to `g` and, if given, its
-    /// Hessian to `h` (values on `pattern`, which [`Bending::attach`] was
-    /// given); returns the energy (J). With colours (a mesh of
+    /// Hessian to `h` (values on `pattern`, the model's
+    /// [`Model::pattern`](crate::model::Model::pattern) this term was
+    /// attached to when the model was built); returns the energy (J). With colours (a mesh of
     /// [`crate::model::PARALLEL_ABOVE`] elements or more) each colour's
     /// patches run in parallel chunks, whose energies are summed in order:
     /// the result does not depend on the number of threads.

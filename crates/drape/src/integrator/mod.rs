@@ -45,7 +45,7 @@ impl State {
     /// At rest in the configuration `positions`, at time 0.
     pub fn at_rest(model: &Model, positions: Vec<f64>) -> Self {
         let n = positions.len();
-        let contact = model.contact.as_ref().map(|c| c.initial_state(&positions));
+        let contact = model.contact().map(|c| c.initial_state(&positions));
         Self {
             time: 0.0,
             positions,
@@ -93,10 +93,10 @@ impl NewtonSystem for StepSystem<'_> {
         self.strain_energy = self.potential.value("membrane").map_or(0.0, |v| v.value);
         model.apply_supports(g, h.as_deref_mut());
         let mut merit = None;
-        if let (Some(contact), Some(state)) = (&model.contact, self.contact.as_deref())
+        if let (Some(contact), Some(state)) = (model.contact(), self.contact.as_deref())
             && contact.method == ContactMethod::Lagrange
         {
-            let mut active = contact.active_nodes(y, self.time, state, &model.fixed);
+            let mut active = contact.active_nodes(y, self.time, state, model.fixed());
             // Keep the elimination scales of the last Hessian evaluation.
             for (new, old) in active.iter_mut().zip(&self.active) {
                 new.scale = old.scale;
@@ -104,12 +104,12 @@ impl NewtonSystem for StepSystem<'_> {
             merit = Some(ContactModel::impose_lagrange(
                 &mut active,
                 g,
-                h.as_deref_mut().map(|h| (h, &model.pattern)),
+                h.as_deref_mut().map(|h| (h, model.pattern())),
             ));
             self.active = active;
         }
         let symmetric = model.symmetric_by_construction()
-            || h.is_some_and(|h| model.pattern.is_symmetric(h, 1e-10));
+            || h.is_some_and(|h| model.pattern().is_symmetric(h, 1e-10));
         Evaluation {
             scale: value.scale,
             symmetric,
@@ -132,14 +132,20 @@ impl NewtonSystem for StepSystem<'_> {
             return false;
         }
         let model = self.model;
-        let (Some(cm), Some(state)) = (&model.contact, self.contact.as_deref_mut()) else {
+        let (Some(cm), Some(state)) = (model.contact(), self.contact.as_deref_mut()) else {
             return false;
         };
         if cm.method != ContactMethod::Lagrange {
             return false;
         }
-        let changed =
-            cm.update_active_set(y, self.time, state, &self.active, &model.fixed, self.length);
+        let changed = cm.update_active_set(
+            y,
+            self.time,
+            state,
+            &self.active,
+            model.fixed(),
+            self.length,
+        );
         if changed {
             self.revisions -= 1;
         }
@@ -171,8 +177,8 @@ fn step_potential<'a>(
     my: &'a mut [f64],
 ) -> IncrementalPotential<'a> {
     let mut list: Vec<Box<dyn StepTerm + 'a>> = vec![Box::new(MembraneTerm::new(model))];
-    if let Some(bending) = &model.bending {
-        list.push(Box::new(BendingTerm::new(bending, &model.pattern)));
+    if let Some(bending) = model.bending() {
+        list.push(Box::new(BendingTerm::new(bending, model.pattern())));
     }
     list.push(Box::new(LoadTerm::new(
         model,
@@ -183,12 +189,12 @@ fn step_potential<'a>(
     if terms.c != 0.0 {
         list.push(Box::new(InertiaTerm::new(model, terms.c, terms.mq, my)));
     }
-    if let Some(contact) = &model.contact
+    if let Some(contact) = model.contact()
         && let ContactMethod::Penalty { stiffness } = contact.method
     {
         list.push(Box::new(PenaltyTerm::new(
             contact,
-            &model.pattern,
+            model.pattern(),
             stiffness,
         )));
     }
@@ -221,10 +227,10 @@ pub(crate) fn solve_step(
     // nodes whose multiplier pulls), but a node that the predictor already
     // puts inside an obstacle no longer costs a re-solution of the step to
     // be admitted (docs/performance.md).
-    if let (Some(cm), Some(state)) = (&model.contact, contact.as_mut())
+    if let (Some(cm), Some(state)) = (model.contact(), contact.as_mut())
         && cm.method == ContactMethod::Lagrange
     {
-        cm.admit_penetrating(y, terms.time, state, &model.fixed, length);
+        cm.admit_penetrating(y, terms.time, state, model.fixed(), length);
     }
     loop {
         let mut potential = step_potential(model, &terms, &mut *f_ext, &mut *my);
@@ -267,11 +273,11 @@ pub(crate) fn solve_step(
                 t
             }
         });
-        let (Some(cm), Some(state)) = (&model.contact, contact.as_mut()) else {
+        let (Some(cm), Some(state)) = (model.contact(), contact.as_mut()) else {
             return Ok((total.unwrap_or_else(empty_report), strain));
         };
         let changed = cm.method == ContactMethod::Lagrange
-            && cm.update_active_set(y, terms.time, state, &active, &model.fixed, length);
+            && cm.update_active_set(y, terms.time, state, &active, model.fixed(), length);
         if !changed {
             cm.refresh_features(y, terms.time, state);
             return Ok((total.unwrap_or_else(empty_report), strain));

@@ -80,10 +80,10 @@ impl DynamicWorkspace {
         mode: crate::solver::LinearMode,
     ) -> Result<Self, crate::solver::LinearSolveError> {
         let n = model.dofs();
-        let (node_ptr, node_rows) = model.pattern.node_graph();
+        let (node_ptr, node_rows) = model.pattern().node_graph();
         let linear =
-            crate::solver::LinearSolver::new(&model.pattern.col_ptr, &model.pattern.row_idx)?
-                .with_transpose(model.pattern.transpose_map().to_vec())
+            crate::solver::LinearSolver::new(&model.pattern().col_ptr, &model.pattern().row_idx)?
+                .with_transpose(model.pattern().transpose_map().to_vec())
                 .with_node_blocks(node_ptr, node_rows)
                 .with_mode(mode);
         Ok(Self {
@@ -96,7 +96,7 @@ impl DynamicWorkspace {
             ratios: Vec::with_capacity(n / 3),
             old_ext: vec![0.0; n],
             y: vec![0.0; n],
-            newton: NewtonWorkspace::new(n, model.pattern.nnz(), linear),
+            newton: NewtonWorkspace::new(n, model.pattern().nnz(), linear),
         })
     }
 }

@@ -215,7 +215,7 @@ impl<'a> IncrementalPotential<'a> {
 mod tests {
     use super::*;
     use crate::integrator::terms::{
-        InertiaTerm, LoadTerm, MembraneTerm, check_term, deformed, patch_model,
+        InertiaTerm, LoadTerm, MembraneTerm, check_term, deformed, patch_builder, patch_model,
     };
     use crate::load::{Load, LoadKind};
     use crate::material::SaintVenantKirchhoff;
@@ -258,10 +258,11 @@ mod tests {
         use crate::bending::BendingRigidity;
         use crate::integrator::terms::BendingTerm;
         for order in 1..=3 {
-            let model = patch_model(order, Box::new(SaintVenantKirchhoff::new(2e6, 0.3)), vec![])
-                .with_bending(BendingRigidity::Isotropic(2e-2))
+            let model = patch_builder(order, Box::new(SaintVenantKirchhoff::new(2e6, 0.3)), vec![])
+                .bending(BendingRigidity::Isotropic(2e-2))
+                .build()
                 .expect("bending");
-            let bending = model.bending.as_ref().expect("bending");
+            let bending = model.bending().expect("bending");
             let y = deformed(&model);
             let n = y.len();
             let q: Vec<f64> = y.iter().map(|v| 1e4 * (v - 0.003)).collect();
@@ -270,7 +271,7 @@ mod tests {
             let mut my = vec![0.0; n];
             let potential = IncrementalPotential::new(vec![
                 Box::new(MembraneTerm::new(&model)),
-                Box::new(BendingTerm::new(bending, &model.pattern)),
+                Box::new(BendingTerm::new(bending, model.pattern())),
                 Box::new(InertiaTerm::new(&model, 1e4, &mq, &mut my)),
             ]);
             let mut whole = Whole(potential);
@@ -278,7 +279,7 @@ mod tests {
                 time: 1.0,
                 contact: None,
             };
-            let (eh, eg) = check_term(&mut whole, &ctx, &model.pattern, &y, 1e-7);
+            let (eh, eg) = check_term(&mut whole, &ctx, model.pattern(), &y, 1e-7);
             assert!(eh < 1e-6, "order {order}: Hessian {eh:e}");
             assert!(eg < 1e-6, "order {order}: gradient {eg:e}");
         }
@@ -320,7 +321,7 @@ mod tests {
             let mut g = vec![f64::NAN; n];
             let v = whole.add(&ctx, &y, &mut g, None);
             assert_eq!(v.potential, pressure == 0.0);
-            let (eh, eg) = check_term(&mut whole, &ctx, &model.pattern, &y, 1e-7);
+            let (eh, eg) = check_term(&mut whole, &ctx, model.pattern(), &y, 1e-7);
             assert!(eh < 1e-6, "p = {pressure}: Hessian {eh:e}");
             assert!(eg < 1e-6, "p = {pressure}: gradient {eg:e}");
         }

@@ -51,6 +51,12 @@ fn suffix(at: &Option<Location>) -> String {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum MeshReadError {
+    /// The file's extension names no format drape reads.
+    #[error("{file}: unknown mesh format: expected a .msh (Gmsh) or .obj file")]
+    UnknownFormat {
+        /// File name.
+        file: String,
+    },
     /// The file could not be read.
     #[error("{file}: cannot read the file: {source}")]
     Io {
@@ -211,6 +217,7 @@ impl MeshReadError {
             | Self::MixedOrders { file, .. }
             | Self::UnsupportedElement { file, .. }
             | Self::NoTriangles { file }
+            | Self::UnknownFormat { file }
             | Self::Truncated { file, .. }
             | Self::TooManyNodes { file, .. }
             | Self::Obj { file, .. } => file,

@@ -14,6 +14,7 @@ mod mass;
 pub use mass::MassKind;
 
 use crate::bending::{Bending, BendingRigidity};
+use crate::contact::ContactModel;
 use crate::element::ElementGeometry;
 use crate::element::membrane::Section;
 use crate::element::quadrature::QuadratureRule;
@@ -25,26 +26,32 @@ use crate::solver::SparsePattern;
 use crate::solver::pattern::colour_elements;
 
 /// Everything that defines the discrete problem, independent of time.
+///
+/// Built in one step by [`ModelBuilder::build`] ([`Model::builder`]), and
+/// read-only afterwards: the sparse pattern, the element blocks' places in
+/// it, the bending patches' places and the mass matrix on it are made
+/// together from the mesh, the bending stencils and the mass's kind, and
+/// none of them can change without the others.
 #[derive(Debug)]
 pub struct Model {
     /// The reference mesh.
-    pub mesh: Mesh,
+    mesh: Mesh,
     /// Element geometry at the stiffness quadrature points.
-    pub geometry: ElementGeometry,
+    geometry: ElementGeometry,
     /// Constitutive model.
-    pub material: Box<dyn Material>,
+    material: Box<dyn Material>,
     /// Thickness and prestress.
-    pub section: Section,
+    section: Section,
     /// Mass density `rho` (kg/m^3).
-    pub density: f64,
+    density: f64,
     /// External loads.
-    pub loads: Vec<Load>,
+    loads: Vec<Load>,
     /// `fixed[3a + i]`: component `i` of node `a` is held at its initial value.
-    pub fixed: Vec<bool>,
+    fixed: Vec<bool>,
     /// How the mass matrix is built.
-    pub mass_kind: MassKind,
+    mass_kind: MassKind,
     /// Sparsity pattern of the Hessian.
-    pub pattern: SparsePattern,
+    pattern: SparsePattern,
     /// Where the element blocks start in the Hessian's values: for block
     /// `(a, b)` of element `e`, at `n^2 e + n a + b`, the value index of
     /// its entry (0, 0) ([`SparsePattern::block_layout`] of its node-graph
@@ -73,9 +80,129 @@ pub struct Model {
     /// Pressure quadrature (shared by all elements).
     pressure_quadrature: PressureQuadrature,
     /// Rigid obstacles and contact enforcement, if any.
-    pub contact: Option<crate::contact::ContactModel>,
-    /// Bending stiffness, if any ([`Model::with_bending`]).
-    pub bending: Option<Bending>,
+    contact: Option<ContactModel>,
+    /// Bending stiffness, if any, attached to `pattern`.
+    bending: Option<Bending>,
+}
+
+/// The parts of a [`Model`] ([`Model::builder`]), built into it at once by
+/// [`ModelBuilder::build`]. Mesh, material, section and density are
+/// required; the rest defaults to no loads, no supports, a consistent
+/// mass, no contact and no bending.
+#[derive(Debug)]
+#[must_use = "a model builder does nothing until `build` is called"]
+pub struct ModelBuilder {
+    mesh: Mesh,
+    material: Box<dyn Material>,
+    section: Section,
+    density: f64,
+    loads: Vec<Load>,
+    fixed: Vec<bool>,
+    mass_kind: MassKind,
+    contact: Option<ContactModel>,
+    bending: Option<BendingRigidity>,
+}
+
+impl ModelBuilder {
+    /// External loads.
+    pub fn loads(mut self, loads: Vec<Load>) -> Self {
+        self.loads = loads;
+        self
+    }
+
+    /// Supports: `fixed[3a + i]` holds component `i` of node `a` at its
+    /// initial value (missing entries are free).
+    pub fn fixed(mut self, fixed: Vec<bool>) -> Self {
+        self.fixed = fixed;
+        self
+    }
+
+    /// How the mass matrix is built (default [`MassKind::Consistent`]).
+    pub fn mass(mut self, kind: MassKind) -> Self {
+        self.mass_kind = kind;
+        self
+    }
+
+    /// Rigid obstacles and how contact with them is enforced, if any.
+    pub fn contact(mut self, contact: impl Into<Option<ContactModel>>) -> Self {
+        self.contact = contact.into();
+        self
+    }
+
+    /// Bending stiffness of `rigidity`, if any (docs/theory.md §1.10): its
+    /// patches are fitted on the reference mesh and their stencils join
+    /// the Hessian's pattern (the couplings between a triangle's nodes and
+    /// the nodes opposite its edges).
+    pub fn bending(mut self, rigidity: impl Into<Option<BendingRigidity>>) -> Self {
+        self.bending = rigidity.into();
+        self
+    }
+
+    /// Builds the model. The mesh is validated first, then the element
+    /// geometry (in the material's axes), the bending patches, the sparse
+    /// pattern of the elements and patches with the assembly's layout on
+    /// it, and the mass matrix.
+    pub fn build(self) -> Result<Model, ModelError> {
+        let Self {
+            mesh,
+            material,
+            section,
+            density,
+            loads,
+            mut fixed,
+            mass_kind,
+            contact,
+            bending,
+        } = self;
+        mesh.validate()?;
+        let p = mesh.order.degree();
+        let geometry = ElementGeometry::with_axis(
+            &mesh,
+            &QuadratureRule::of_degree(4 * (p - 1)),
+            material.axis(),
+        )?;
+        let colours = colour_elements(mesh.node_count(), mesh.elements());
+        let parallel = mesh.element_count() >= PARALLEL_ABOVE;
+        let halves = (!parallel).then(|| Halves::new(&mesh, &colours));
+        let mut bending = match bending {
+            Some(rigidity) => Some(Bending::new(&mesh, rigidity)?),
+            None => None,
+        };
+        let layout = Layout::new(&mesh, &colours, halves.as_ref(), bending.as_ref());
+        if let Some(b) = &mut bending {
+            b.attach(&layout.pattern, parallel);
+        }
+        let mass = mass::assemble_mass(
+            &mesh,
+            &layout.pattern,
+            density * section.thickness,
+            mass_kind,
+        )?;
+        let area_weights = mass::area_weights(&mesh);
+        let pressure_quadrature = PressureQuadrature::new(mesh.order);
+        fixed.resize(3 * mesh.node_count(), false);
+        Ok(Model {
+            mesh,
+            geometry,
+            material,
+            section,
+            density,
+            loads,
+            fixed,
+            mass_kind,
+            pattern: layout.pattern,
+            element_blocks: layout.element_blocks,
+            element_block_first: layout.element_block_first,
+            untouched_blocks: layout.untouched_blocks,
+            colours,
+            halves,
+            mass,
+            area_weights,
+            pressure_quadrature,
+            contact,
+            bending,
+        })
+    }
 }
 
 /// Where the Hessian's entries are and which element blocks write first:
@@ -261,94 +388,90 @@ impl Halves {
 pub const PARALLEL_ABOVE: usize = 4096;
 
 impl Model {
-    /// Builds the model; the mesh is validated first.
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
+    /// The parts of a model over `mesh` of `material`, with `section` and
+    /// mass density `density` (kg/m^3); [`ModelBuilder::build`] makes it.
+    pub fn builder(
         mesh: Mesh,
         material: Box<dyn Material>,
         section: Section,
         density: f64,
-        loads: Vec<Load>,
-        fixed: Vec<bool>,
-        mass_kind: MassKind,
-    ) -> Result<Self, ModelError> {
-        mesh.validate()?;
-        let p = mesh.order.degree();
-        let geometry = ElementGeometry::with_axis(
-            &mesh,
-            &QuadratureRule::of_degree(4 * (p - 1)),
-            material.axis(),
-        )?;
-        let colours = colour_elements(mesh.node_count(), mesh.elements());
-        let halves = (mesh.element_count() < PARALLEL_ABOVE).then(|| Halves::new(&mesh, &colours));
-        let layout = Layout::new(&mesh, &colours, halves.as_ref(), None);
-        let mass = mass::assemble_mass(
-            &mesh,
-            &layout.pattern,
-            density * section.thickness,
-            mass_kind,
-        )?;
-        let area_weights = mass::area_weights(&mesh);
-        let pressure_quadrature = PressureQuadrature::new(mesh.order);
-        let mut fixed = fixed;
-        fixed.resize(3 * mesh.node_count(), false);
-        Ok(Self {
+    ) -> ModelBuilder {
+        ModelBuilder {
             mesh,
-            geometry,
             material,
             section,
             density,
-            loads,
-            fixed,
-            mass_kind,
-            pattern: layout.pattern,
-            element_blocks: layout.element_blocks,
-            element_block_first: layout.element_block_first,
-            untouched_blocks: layout.untouched_blocks,
-            colours,
-            halves,
-            mass,
-            area_weights,
-            pressure_quadrature,
+            loads: Vec::new(),
+            fixed: Vec::new(),
+            mass_kind: MassKind::Consistent,
             contact: None,
             bending: None,
-        })
+        }
     }
 
-    /// Adds bending stiffness of `rigidity` (docs/theory.md §1.10): its
-    /// patches are fitted on the reference mesh and their stencils join the
-    /// Hessian's pattern (which grows by the couplings between a triangle's
-    /// nodes and the nodes opposite its edges).
-    pub fn with_bending(mut self, rigidity: BendingRigidity) -> Result<Self, ModelError> {
-        let mut bending = Bending::new(&self.mesh, rigidity)?;
-        let layout = Layout::new(
-            &self.mesh,
-            &self.colours,
-            self.halves.as_ref(),
-            Some(&bending),
-        );
-        bending.attach(&layout.pattern, self.parallel());
-        self.mass = mass::assemble_mass(
-            &self.mesh,
-            &layout.pattern,
-            self.density * self.section.thickness,
-            self.mass_kind,
-        )?;
-        self.pattern = layout.pattern;
-        self.element_blocks = layout.element_blocks;
-        self.element_block_first = layout.element_block_first;
-        self.untouched_blocks = layout.untouched_blocks;
-        self.bending = Some(bending);
-        Ok(self)
+    /// The reference mesh.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// Element geometry at the stiffness quadrature points.
+    pub fn geometry(&self) -> &ElementGeometry {
+        &self.geometry
+    }
+
+    /// The constitutive model.
+    pub fn material(&self) -> &dyn Material {
+        self.material.as_ref()
+    }
+
+    /// Thickness and prestress.
+    pub fn section(&self) -> Section {
+        self.section
+    }
+
+    /// Mass density `rho` (kg/m^3).
+    pub fn density(&self) -> f64 {
+        self.density
+    }
+
+    /// External loads.
+    pub fn loads(&self) -> &[Load] {
+        &self.loads
+    }
+
+    /// `fixed[3a + i]`: component `i` of node `a` is held at its initial
+    /// value (`dofs` long).
+    pub fn fixed(&self) -> &[bool] {
+        &self.fixed
+    }
+
+    /// How the mass matrix is built.
+    pub fn mass_kind(&self) -> MassKind {
+        self.mass_kind
+    }
+
+    /// Sparsity pattern of the Hessian (the elements' and the bending
+    /// patches' couplings).
+    pub fn pattern(&self) -> &SparsePattern {
+        &self.pattern
+    }
+
+    /// Rigid obstacles and contact enforcement, if any.
+    pub fn contact(&self) -> Option<&ContactModel> {
+        self.contact.as_ref()
+    }
+
+    /// Bending stiffness, if any, attached to [`Model::pattern`].
+    pub fn bending(&self) -> Option<&Bending> {
+        self.bending.as_ref()
     }
 
     /// Whether loops over elements and nodes go to rayon's pool. Below
     /// [`PARALLEL_ABOVE`] elements they run in two halves on the calling
     /// thread and [`crate::par`]'s helper instead: waking a sleeping rayon
     /// worker for a colour of ~120 elements or a loop over ~400 nodes
-    /// costs more than the loop (on the 20x20 pedestal the hand-offs took
-    /// a third of the CPU time), a spinning helper does not
-    /// (docs/performance.md). Results do not depend on the thread count:
+    /// costs more than the loop, a spinning helper does not
+    /// (docs/performance.md, "The round before"). Results do not depend on the thread count:
     /// the splits are fixed and partial sums are added in order.
     pub fn parallel(&self) -> bool {
         self.mesh.element_count() >= PARALLEL_ABOVE
@@ -523,7 +646,7 @@ mod tests {
     use crate::mesh::generate::{Pattern, disc, rectangle};
 
     fn wrinkling_model(mesh: Mesh) -> Model {
-        Model::new(
+        Model::builder(
             mesh,
             Box::new(Wrinkling::new(
                 2.0e6,
@@ -536,10 +659,8 @@ mod tests {
                 prestress: 0.0,
             },
             320.0,
-            Vec::new(),
-            Vec::new(),
-            MassKind::Consistent,
         )
+        .build()
         .expect("a valid mesh")
     }
 

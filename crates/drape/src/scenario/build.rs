@@ -10,7 +10,7 @@ use super::{
 use crate::bending::BendingError;
 use crate::integrator::Newmark;
 use crate::load::{Load, LoadKind};
-use crate::mesh::{ElementOrder, MAX_MESH_NODES, Mesh, generate};
+use crate::mesh::{ElementOrder, MAX_MESH_NODES, Mesh, MeshReadError, generate};
 use crate::model::{Model, ModelError};
 use crate::simulation::schedule::{AdaptiveSteps, RestCriterion};
 use crate::solver::NewtonSettings;
@@ -179,39 +179,31 @@ impl Scenario {
         check_memory(&c, &self.mesh, mesh.node_count())?;
         check_pattern_memory(&c, &self.mesh, &mesh, bending.is_some())?;
 
-        let mut model = Model::new(
-            mesh,
-            material,
-            section,
-            density,
-            loads,
-            fixed,
-            self.analysis.mass,
-        )
-        .map_err(|e| match e {
-            ModelError::Axis(e) => c.invalid("material", None, "warp_direction", e.to_string()),
-            e => ScenarioError::Mesh {
-                file: file.to_path_buf(),
-                message: e.to_string(),
-            },
-        })?;
-        if let Some(rigidity) = bending {
-            model = model.with_bending(rigidity).map_err(|e| match e {
-                ModelError::Bending(BendingError::Axis(e)) => {
+        let model = Model::builder(mesh, material, section, density)
+            .loads(loads)
+            .fixed(fixed)
+            .mass(self.analysis.mass)
+            .contact(contact)
+            .bending(bending)
+            .build()
+            .map_err(|e| match e {
+                ModelError::Axis(e) | ModelError::Bending(BendingError::Axis(e)) => {
                     c.invalid("material", None, "warp_direction", e.to_string())
                 }
-                e => c.invalid(
+                ModelError::Bending(e) => c.invalid(
                     "material",
                     None,
                     "bending_rigidity",
                     format!("cannot be set up on this mesh: {e}"),
                 ),
+                error => ScenarioError::Mesh {
+                    file: file.to_path_buf(),
+                    error,
+                },
             })?;
+        if let Some(contact) = model.contact() {
+            check_initial_penetration(&c, model.mesh(), contact)?;
         }
-        if let Some(contact) = &contact {
-            check_initial_penetration(&c, &model.mesh, contact)?;
-        }
-        model.contact = contact;
         let title = self.title.clone().unwrap_or_else(|| {
             file.file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
@@ -587,7 +579,7 @@ fn build_mesh(
     check_extent(c, spec, &mesh)?;
     mesh.validate().map_err(|e| ScenarioError::Mesh {
         file: c.file.to_path_buf(),
-        message: e.to_string(),
+        error: e.into(),
     })?;
     Ok(mesh)
 }
@@ -913,7 +905,7 @@ fn file_mesh(
     let rel = c.required(t, None, "path", &spec.path, "for shape = \"file\"")?;
     let path: PathBuf = base.join(&rel);
     let (mesh, bytes) =
-        read_mesh_file_bytes(&path).map_err(|message| c.invalid(t, None, "path", message))?;
+        read_mesh_file_bytes(&path).map_err(|e| c.invalid(t, None, "path", e.to_string()))?;
     inputs.push(InputFile::new("mesh.path".into(), &path, &bytes));
     mesh.validate()
         .map_err(|e| c.invalid(t, None, "path", format!("{}: {e}", path.display())))?;
@@ -935,14 +927,15 @@ fn file_mesh(
     Ok(mesh)
 }
 
-/// Reads a `.msh` or `.obj` mesh file.
-pub fn read_mesh_file(path: &Path) -> Result<Mesh, String> {
+/// Reads a `.msh` (Gmsh) or `.obj` (Wavefront) mesh file, by its
+/// extension.
+pub fn read_mesh_file(path: &Path) -> Result<Mesh, MeshReadError> {
     read_mesh_file_bytes(path).map(|(mesh, _)| mesh)
 }
 
 /// [`read_mesh_file`], with the file's bytes as read (their hash is
 /// recorded, for a resume to tell a changed file).
-fn read_mesh_file_bytes(path: &Path) -> Result<(Mesh, Vec<u8>), String> {
+fn read_mesh_file_bytes(path: &Path) -> Result<(Mesh, Vec<u8>), MeshReadError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -950,10 +943,14 @@ fn read_mesh_file_bytes(path: &Path) -> Result<(Mesh, Vec<u8>), String> {
     let parse = match ext.as_deref() {
         Some("msh") => crate::mesh::gmsh::parse_msh,
         Some("obj") => crate::mesh::obj::parse_obj,
-        _ => return Err("unknown mesh format: expected a .msh (Gmsh) or .obj file".into()),
+        _ => {
+            return Err(MeshReadError::UnknownFormat {
+                file: path.display().to_string(),
+            });
+        }
     };
-    let (bytes, file) = crate::mesh::MeshReadError::read(path).map_err(|e| e.to_string())?;
-    let mesh = parse(&bytes, &file).map_err(|e| e.to_string())?;
+    let (bytes, file) = MeshReadError::read(path)?;
+    let mesh = parse(&bytes, &file)?;
     Ok((mesh, bytes))
 }
 

@@ -70,13 +70,14 @@ pub enum ScenarioError {
         /// What is wrong, with the value.
         message: String,
     },
-    /// A mesh file that cannot be read.
-    #[error("{file}: mesh: {message}")]
+    /// A mesh the model cannot be built on (its elements, the lumped
+    /// mass of a node).
+    #[error("{file}: mesh: {error}")]
     Mesh {
         /// The scenario file.
         file: PathBuf,
-        /// The reader's or validator's message.
-        message: String,
+        /// What is wrong with the mesh.
+        error: crate::model::ModelError,
     },
 }
 

@@ -271,7 +271,7 @@ impl Checkpoint {
         let model = &setup.model;
         let expected = Expected {
             dofs: model.dofs(),
-            bodies: model.contact.as_ref().map_or(0, |c| c.bodies.len()),
+            bodies: model.contact().map_or(0, |c| c.bodies.len()),
             scenario_hash: setup.scenario_hash,
             inputs: Some(&setup.inputs),
         };

@@ -83,7 +83,7 @@ fn write_frame(
     let displacement: Vec<f64> = s
         .positions
         .iter()
-        .zip(model.mesh.nodes.iter().flatten())
+        .zip(model.mesh().nodes.iter().flatten())
         .map(|(y, x)| y - x)
         .collect();
     let no_contact;
@@ -99,8 +99,8 @@ fn write_frame(
     let path = dir.join(&rel);
     let frame = Frame {
         positions,
-        connectivity: &model.mesh.connectivity,
-        nodes_per_element: model.mesh.order.nodes_per_element(),
+        connectivity: &model.mesh().connectivity,
+        nodes_per_element: model.mesh().order.nodes_per_element(),
         point_data: vec![
             DataArray {
                 name: "displacement",

@@ -29,19 +29,21 @@ use std::sync::atomic::{AtomicBool, Ordering};
 mod checkpoint;
 mod frames;
 pub mod schedule;
+mod start;
 mod warnings;
 use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
 use crate::integrator::{State, StaticStepper};
 use crate::model::Model;
 use crate::output::atomic::write_atomic;
 use crate::output::history::HistoryWriter;
-use crate::output::pvd::{PvdWriter, frame_relative_path};
-use crate::scenario::{Analysis, InputFile, Setup};
+use crate::scenario::{Analysis, Setup};
 use crate::solver::NewtonError;
 pub use checkpoint::{Checkpoint, CheckpointError, Counters};
 use frames::Snapshot;
 use schedule::{RestWatch, StepController, fastest_node};
 use serde::Serialize;
+use start::Start;
+pub use start::{ResumeError, SetupError, check_resume_inputs};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -199,9 +201,9 @@ pub enum RunError {
         /// Output directory.
         out: PathBuf,
     },
-    /// The linear solver could not even be set up.
+    /// The run could not start (nothing was stepped).
     #[error("{0}")]
-    Setup(String),
+    Setup(SetupError),
     /// Stopped on request (Ctrl-C, SIGTERM) after a step; a checkpoint was written.
     #[error("{message}")]
     Interrupted {
@@ -210,7 +212,7 @@ pub enum RunError {
     },
     /// The checkpoint, history or collection to resume from is unusable.
     #[error("cannot resume: {0}")]
-    Resume(String),
+    Resume(ResumeError),
     /// The run failed, and `summary.json` could not say so either.
     #[error("{cause}; summary.json could not be written either: {error}")]
     Unrecorded {
@@ -412,43 +414,6 @@ pub fn checkpoint_path(out: &Path) -> PathBuf {
     out.join("checkpoint.bin")
 }
 
-/// Before a resume is set up: each input file the checkpoint in `out`
-/// recorded (the mesh, the obstacles' meshes) must still hold the bytes it
-/// had, or the resume is refused naming the file — changed, missing or
-/// unreadable. A checkpoint that cannot be read, or one that recorded no
-/// files (version 3), passes: [`run_with`] reports the former, and checks
-/// the scenario's files again against the checkpoint when it resumes.
-///
-/// The check comes before the scenario is built, so that a changed file
-/// is reported as such rather than as an error of its contents (a mesh
-/// that no longer reads) or of the model's sizes.
-pub fn check_resume_inputs(out: &Path) -> Result<(), RunError> {
-    let path = checkpoint_path(out);
-    let Ok(bytes) = std::fs::read(&path) else {
-        return Ok(());
-    };
-    let Ok(Some(inputs)) = Checkpoint::recorded_inputs(&bytes) else {
-        return Ok(());
-    };
-    for input in inputs {
-        let error = match InputFile::hash_file(&input.path) {
-            Ok(hash) if hash == input.hash => continue,
-            Ok(_) => CheckpointError::InputChanged {
-                key: input.key,
-                recorded: input.path.clone(),
-                path: input.path,
-            },
-            Err(error) => CheckpointError::InputMissing {
-                key: input.key,
-                path: input.path,
-                error,
-            },
-        };
-        return Err(RunError::Resume(format!("{}: {error}", path.display())));
-    }
-    Ok(())
-}
-
 /// Runs a scenario into `out`, calling `observer` after each converged
 /// step. Writes `summary.json` in every case; returns it on success.
 pub fn run(
@@ -573,10 +538,8 @@ fn run_session(
     let start = Instant::now();
     let model = &setup.model;
     std::fs::create_dir_all(out.join("fields")).map_err(io_err(out))?;
-    let mut ws = match DynamicWorkspace::with_mode(model, setup.linear) {
-        Ok(ws) => ws,
-        Err(e) => return Err(setup_failure(setup, out, start, e.to_string())),
-    };
+    let mut ws = DynamicWorkspace::with_mode(model, setup.linear)
+        .map_err(|e| setup_failure(setup, out, start, SetupError::LinearSolver(e)))?;
     let x = model.initial_positions();
     let length = reference_length(&x);
     let (schedule, end_time): (Vec<(usize, f64)>, f64) = match &setup.analysis {
@@ -586,112 +549,18 @@ fn run_session(
         ),
         Analysis::Static { steps } => (vec![(*steps, 1.0 / *steps as f64)], 1.0),
     };
-    let history_path = out.join("history.csv");
-    // `written`: the frames handed to the writer thread, `(time, step)`;
-    // a fresh run also has its initial frame to hand over.
-    let (state, counters, controller, history, pvd, written, initial_frame) = if control.resume {
-        let path = checkpoint_path(out);
-        let bytes = std::fs::read(&path)
-            .map_err(|e| RunError::Resume(format!("{}: {e}", path.display())))?;
-        let ck = Checkpoint::read(&bytes, setup)
-            .map_err(|e| RunError::Resume(format!("{}: {e}", path.display())))?;
-        // Checked before the history and the collection are cut back.
-        let controller = step_controller(setup, &ck.counters)
-            .map_err(|e| RunError::Resume(format!("{}: {e}", path.display())))?;
-        if let Some((_, k)) = ck
-            .frames
-            .iter()
-            .find(|(_, k)| !out.join(frame_relative_path(*k as u64)).is_file())
-        {
-            return Err(RunError::Resume(format!(
-                "{}: the frame {} it lists is missing: the collection would name a file that is not there; restore the frames, or start a fresh run (without --resume)",
-                path.display(),
-                out.join(frame_relative_path(*k as u64)).display()
-            )));
-        }
-        ws.f_ext.copy_from_slice(&ck.external_forces);
-        let entries = ck
-            .frames
-            .iter()
-            .map(|(t, k)| (*t, frame_relative_path(*k as u64)))
-            .collect();
-        let history = History {
-            setup,
-            writer: HistoryWriter::resume(
-                &history_path,
-                &history_columns(setup),
-                ck.counters.step.saturating_add(1),
-            )
-            .map_err(|e| RunError::Resume(format!("{}: {e}", history_path.display())))?,
-            scratch: vec![0.0; model.dofs()],
-            last: None,
-        };
-        let pvd = PvdWriter::resume(out.join("fields.pvd"), entries).map_err(io_err(out))?;
-        (
-            ck.state,
-            ck.counters,
-            controller,
-            history,
-            pvd,
-            ck.frames,
-            None,
-        )
+    let Start {
+        state,
+        counters,
+        controller,
+        history,
+        pvd,
+        written,
+        initial_frame,
+    } = if control.resume {
+        start::resume(setup, out, &mut ws)?
     } else {
-        let state = match &setup.analysis {
-            Analysis::Dynamic { newmark, .. } => match newmark.initial_state(model, &mut ws) {
-                Ok(s) => s,
-                Err(e) => {
-                    let message = format!(
-                        "the initial acceleration M^-1 (F_ext - F_int) cannot be computed: {e}"
-                    );
-                    return Err(setup_failure(setup, out, start, message));
-                }
-            },
-            Analysis::Static { .. } => {
-                ws.f_ext.fill(0.0);
-                State::at_rest(model, x.clone())
-            }
-        };
-        let mut history = History {
-            setup,
-            writer: HistoryWriter::create(&history_path, &history_columns(setup))
-                .map_err(io_err(&history_path))?,
-            scratch: vec![0.0; model.dofs()],
-            last: None,
-        };
-        let strain0 = model.strain_energy(&state.positions);
-        let (stretch0, fractions0) = model.stretch_and_states(&state.positions);
-        let contact0 = contact_report(model, &state);
-        history.row(
-            &state,
-            &StepRecord {
-                step: 0,
-                dt: 0.0,
-                iterations: 0,
-                strain: strain0,
-                cutbacks: 0,
-                min_stretch: stretch0.0,
-                contact: contact0.clone(),
-                states: fractions0,
-            },
-        )?;
-        let initial_frame = Snapshot::of(0, &state, contact0.as_ref());
-        let counters = Counters {
-            last_strain: strain0,
-            ..Counters::default()
-        };
-        let pvd = PvdWriter::new(out.join("fields.pvd"));
-        let controller =
-            step_controller(setup, &counters).map_err(|e| setup_failure(setup, out, start, e))?;
-        (
-            state,
-            counters,
-            controller,
-            history,
-            pvd,
-            vec![(0.0, 0)],
-            Some(initial_frame),
-        )
+        start::fresh(setup, out, &mut ws, &x, start)?
     };
     let rest = setup
         .rest
@@ -701,10 +570,7 @@ fn run_session(
     std::thread::scope(|scope| {
         let mut frame_writer = match frames::spawn(scope, model, out, pvd) {
             Ok(w) => w,
-            Err(e) => {
-                let message = format!("cannot start the thread writing the field frames: {e}");
-                return Err(setup_failure(setup, out, start, message));
-            }
+            Err(e) => return Err(setup_failure(setup, out, start, SetupError::FrameThread(e))),
         };
         if let Some(snapshot) = initial_frame {
             frame_writer.submit(snapshot)?;
@@ -744,21 +610,6 @@ fn run_session(
         *recorded = true;
         run.finish(end)
     })
-}
-
-/// The step controller of an adaptive run (`None` for fixed steps) where
-/// `counters` left it: a fresh run's start in the first segment at its
-/// `dt`, or a checkpoint's segment and step size, refused (`Err`) when
-/// they do not fit the schedule.
-fn step_controller(setup: &Setup, counters: &Counters) -> Result<Option<StepController>, String> {
-    match (&setup.adaptive, &setup.analysis) {
-        (Some(adaptive), Analysis::Dynamic { segments, .. }) => {
-            StepController::new(segments, *adaptive, setup.max_cutbacks)
-                .resume(counters.segment, counters.step_size)
-                .map(Some)
-        }
-        _ => Ok(None),
-    }
 }
 
 /// How the loop over the schedule ended.
@@ -943,7 +794,7 @@ impl Stepper<'_, '_> {
         }
         // With a wrinkling model compression carries no stress, and the
         // instability does not exist.
-        if stretch < SVK_CRITICAL_STRETCH && model.material.wrinkle_state([0.0; 3]).is_none() {
+        if stretch < SVK_CRITICAL_STRETCH && model.material().wrinkle_state([0.0; 3]).is_none() {
             return Ok(Some(End::Failed(RunError::MaterialInstability {
                 time: state.time,
                 element,
@@ -1117,8 +968,7 @@ impl Stepper<'_, '_> {
 /// The contact report of `state`, if the model has contact.
 fn contact_report(model: &Model, state: &State) -> Option<ContactReport> {
     model
-        .contact
-        .as_ref()
+        .contact()
         .zip(state.contact.as_ref())
         .map(|(c, s)| c.report(&state.positions, state.time, s))
 }
@@ -1158,8 +1008,8 @@ fn summary(
         output_seconds: 0.0,
         output_thread_seconds: 0.0,
         first_step_seconds: 0.0,
-        nodes: model.mesh.node_count(),
-        elements: model.mesh.element_count(),
+        nodes: model.mesh().node_count(),
+        elements: model.mesh().element_count(),
         dofs: model.dofs(),
         fixed_dofs: model.fixed_count(),
         kinetic_energy: figures.kinetic,
@@ -1188,18 +1038,18 @@ fn write_summary(out: &Path, summary: &Summary) -> Result<(), RunError> {
 }
 
 /// Writes a failed summary for a run that could not start, and returns the error.
-fn setup_failure(setup: &Setup, out: &Path, start: Instant, message: String) -> RunError {
+fn setup_failure(setup: &Setup, out: &Path, start: Instant, error: SetupError) -> RunError {
     let summary = summary(
         setup,
         &initial_figures(setup),
-        Some(message.clone()),
+        Some(error.to_string()),
         0,
         0,
         0,
         start,
     );
     match write_summary(out, &summary) {
-        Ok(()) => RunError::Setup(message),
+        Ok(()) => RunError::Setup(error),
         Err(e) => e,
     }
 }

@@ -117,6 +117,33 @@ pub struct StepController {
     halvings: usize,
 }
 
+/// A checkpoint's place in an adaptive schedule that the scenario's
+/// schedule does not have ([`StepController::resume`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ScheduleMismatch {
+    /// No such segment.
+    #[error("segment {segment}, but the schedule has {segments} segments")]
+    Segment {
+        /// The checkpoint's segment.
+        segment: usize,
+        /// Segments of the schedule.
+        segments: usize,
+    },
+    /// A step size the segment's controller cannot take.
+    #[error("step size {h} s outside segment {segment}'s [{floor}, {dt_max}] s")]
+    StepSize {
+        /// The checkpoint's step size (s).
+        h: f64,
+        /// Its segment.
+        segment: usize,
+        /// The smallest step of the segment (s).
+        floor: f64,
+        /// The largest (s).
+        dt_max: f64,
+    },
+}
+
 impl StepController {
     /// A controller at `t = 0` for the `(steps, dt)` segments of the
     /// schedule; each `dt` must lie in `(0, dt_max]` (the scenario checks).
@@ -147,24 +174,26 @@ impl StepController {
     /// The controller as a checkpoint left it: in segment `segment`, aiming
     /// at `h` (s; 0: the segment's `dt`, as on entering it). `Err` names
     /// the value that does not fit this schedule.
-    pub fn resume(mut self, segment: usize, h: f64) -> Result<Self, String> {
+    pub fn resume(mut self, segment: usize, h: f64) -> Result<Self, ScheduleMismatch> {
         let Some(s) = self.segments.get(segment).copied() else {
             if segment == self.segments.len() {
                 // At the schedule's end: nothing is left to step.
                 self.segment = segment;
                 return Ok(self);
             }
-            return Err(format!(
-                "segment {segment}, but the schedule has {} segments",
-                self.segments.len()
-            ));
+            return Err(ScheduleMismatch::Segment {
+                segment,
+                segments: self.segments.len(),
+            });
         };
         let h = if h == 0.0 { s.dt } else { h };
         if !(h.is_finite() && h >= s.floor * (1.0 - END_TOLERANCE) && h <= s.dt_max) {
-            return Err(format!(
-                "step size {h} s outside segment {segment}'s [{}, {}] s",
-                s.floor, s.dt_max
-            ));
+            return Err(ScheduleMismatch::StepSize {
+                h,
+                segment,
+                floor: s.floor,
+                dt_max: s.dt_max,
+            });
         }
         self.segment = segment;
         self.h = h;
@@ -546,9 +575,24 @@ mod tests {
         assert_eq!(c.clone().resume(1, 0.0).unwrap().step_size(), 0.001);
         assert!(c.clone().resume(2, 0.0).is_ok());
         let e = c.clone().resume(3, 0.001).unwrap_err();
-        assert!(e.contains("segment 3"), "{e}");
+        assert_eq!(
+            e,
+            ScheduleMismatch::Segment {
+                segment: 3,
+                segments: 2
+            }
+        );
+        assert!(e.to_string().contains("segment 3"), "{e}");
         let e = c.clone().resume(1, 0.5).unwrap_err();
-        assert!(e.contains("step size 0.5"), "{e}");
+        assert!(matches!(
+            e,
+            ScheduleMismatch::StepSize {
+                h: 0.5,
+                segment: 1,
+                ..
+            }
+        ));
+        assert!(e.to_string().contains("step size 0.5"), "{e}");
         assert!(c.resume(0, f64::NAN).is_err());
     }
 

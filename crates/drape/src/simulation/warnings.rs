@@ -42,7 +42,7 @@ pub fn warnings(setup: &Setup) -> Vec<String> {
 /// A tension-field wrinkling model together with a bending rigidity.
 fn tension_field_with_bending(setup: &Setup, out: &mut Vec<String>) {
     let model = &setup.model;
-    if model.bending.is_some() && model.material.wrinkle_state(BIAXIAL_COMPRESSION).is_some() {
+    if model.bending().is_some() && model.material().wrinkle_state(BIAXIAL_COMPRESSION).is_some() {
         out.push(
             "material.wrinkling is a tension-field model and material.bending_rigidity is set: compressed elements have no in-plane stiffness and, with bending, may collapse, which makes the steps tiny; with bending the mesh resolves the folds, so wrinkling = \"none\" is the model to use (README, \"Bending\")".to_string(),
         );
@@ -68,7 +68,7 @@ fn rest_after_the_end(setup: &Setup, out: &mut Vec<String>) {
 /// Obstacles that move more than [`MAX_MOTION_PER_STEP`] of the smallest
 /// element edge in a step.
 fn fast_obstacles(setup: &Setup, out: &mut Vec<String>) {
-    let Some(contact) = &setup.model.contact else {
+    let Some(contact) = setup.model.contact() else {
         return;
     };
     // Load steps of a static analysis are not time: bodies do not move.
@@ -82,7 +82,7 @@ fn fast_obstacles(setup: &Setup, out: &mut Vec<String>) {
             None => dt,
         })
         .fold(0.0, f64::max);
-    let mesh = &setup.model.mesh;
+    let mesh = setup.model.mesh();
     let edge = mesh
         .elements()
         .flat_map(|el| {

@@ -280,8 +280,8 @@ fn run_ranges<T: Send>(parts: Vec<T>, work: impl Fn(T) + Sync + Send) {
 /// matrices): `count(r, scratch)` gives the length of row `r`, then
 /// `fill(r, scratch, cols, vals)` writes it into its final place. The
 /// arrays are allocated once at their final size and written once: no
-/// growing vectors, no concatenation of per-range parts (at 700x700
-/// divisions the products hold about 400 MB). `scratch` makes each
+/// growing vectors, no concatenation of per-range parts (on the largest
+/// meshes the products hold hundreds of megabytes). `scratch` makes each
 /// range's work space, afresh for each pass.
 fn build_by_rows<S>(
     rows: usize,

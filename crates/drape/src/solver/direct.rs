@@ -9,11 +9,12 @@
 //! made once, on first use, and kept for as long as the pattern holds;
 //! each numeric factorisation is written into the storage of the last.
 
-use super::LinearSolveError;
 use super::block_lu::BlockLu;
+use super::linear_error::{FactorStage, SolveFailure};
 use crate::vecn::{distance, norm};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::LuError;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
@@ -71,18 +72,19 @@ impl Cholesky {
     pub(super) fn analyse(
         &mut self,
         pattern: SymbolicSparseColMatRef<'_, usize>,
-    ) -> Result<(), LinearSolveError> {
+    ) -> Result<(), SolveFailure> {
         if self.factor.is_none() {
             let params = CholeskySymbolicParams {
                 // faer picks its simplicial kernel below a flop threshold;
                 // with 3x3 node blocks the supernodal one is faster at every
-                // size measured here (the 20x20 pedestal: -39 % CPU).
+                // size measured (docs/performance.md, "The pedestal after
+                // the first optimisations").
                 supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
                 ..Default::default()
             };
             let symb =
                 factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Amd, params)
-                    .map_err(|e| LinearSolveError::Factorization(format!("{e:?}")))?;
+                    .map_err(|e| SolveFailure::faer(FactorStage::CholeskyAnalysis, e))?;
             let l = vec![0.0; symb.len_val()];
             self.factor = Some((symb, l));
         }
@@ -146,10 +148,10 @@ impl Lu {
     pub(super) fn analyse(
         &mut self,
         pattern: SymbolicSparseColMatRef<'_, usize>,
-    ) -> Result<(), LinearSolveError> {
+    ) -> Result<(), SolveFailure> {
         if self.factor.is_none() {
             let symb = factorize_symbolic_lu(pattern, Default::default())
-                .map_err(|e| LinearSolveError::Factorization(format!("{e:?}")))?;
+                .map_err(|e| SolveFailure::faer(FactorStage::LuAnalysis, e))?;
             self.factor = Some((symb, NumericLu::new()));
         }
         Ok(())
@@ -164,7 +166,7 @@ impl Lu {
         rhs: &mut Mat<f64>,
         par: Par,
         scratch: &mut Scratch,
-    ) -> Result<(), LinearSolveError> {
+    ) -> Result<(), SolveFailure> {
         let (symb, numeric) = self.factor.as_mut().expect("analysed before");
         scratch.reserve(
             symb.factorize_numeric_lu_scratch::<f64>(par, Default::default())
@@ -174,8 +176,12 @@ impl Lu {
         let stack = scratch.stack();
         let lu = symb
             .factorize_numeric_lu::<f64>(numeric, a, par, stack, Default::default())
-            .map_err(|e| LinearSolveError::Singular {
-                detail: format!("{e:?}"),
+            .map_err(|e| match e {
+                LuError::SymbolicSingular { index } => SolveFailure::NoPivot {
+                    step: index,
+                    dimension: pattern.ncols(),
+                },
+                LuError::Generic(e) => SolveFailure::faer(FactorStage::LuFactorization, e),
             })?;
         lu.solve_in_place_with_conj(Conj::No, rhs.as_mut(), par, stack);
         Ok(())

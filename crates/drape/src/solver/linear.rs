@@ -48,6 +48,7 @@
 use super::block_lu::BlockLu;
 use super::direct::{self, Cholesky, Lu, Scratch};
 use super::krylov;
+pub use super::linear_error::{LinearSolveError, Matrix, SolveFailure};
 use super::precondition::{Preconditioned, Preconditioner, Preconditioners};
 use super::product::{self, Product};
 use crate::vecn::norm;
@@ -80,10 +81,10 @@ pub enum Factorization {
     MultigridGmres,
 }
 
-impl Factorization {
+impl std::fmt::Display for Factorization {
     /// What solved the system, in words (error messages).
-    fn label(self) -> &'static str {
-        match self {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
             Factorization::BlockLu => "block LU",
             Factorization::Cholesky => "Cholesky",
             Factorization::Lu => "LU",
@@ -93,9 +94,11 @@ impl Factorization {
             Factorization::BlockJacobiCg => "block-Jacobi CG",
             Factorization::MultigridCg => "multigrid CG",
             Factorization::MultigridGmres => "multigrid GMRES",
-        }
+        })
     }
+}
 
+impl Factorization {
     /// Whether the solution comes from a factorisation, whose residual
     /// the solve checks (Krylov methods check their own).
     fn is_direct(self) -> bool {
@@ -131,13 +134,14 @@ pub struct LinearStats {
 const AUTO_ITERATIVE_ABOVE: usize = 300_000;
 /// Largest symmetric system (unknowns) that `direct` and `auto` factorise
 /// by the node-block LU: above it faer's supernodal Cholesky, whose dense
-/// kernels pay off on large fronts, is faster (measured: equal at 7,800
-/// unknowns, twice as fast at 30,600; docs/performance.md).
+/// kernels pay off on large fronts, is faster (docs/performance.md, "The
+/// node-block LU against faer").
 const BLOCK_LU_MAX_SYMMETRIC: usize = 5_000;
 /// Largest non-symmetric system for the node-block LU: above it a
-/// Cholesky factorisation of the symmetric part and ~10 preconditioned
+/// Cholesky factorisation of the symmetric part and a few preconditioned
 /// GMRES iterations cost less than the general block LU (twice the
-/// symmetric one's work).
+/// symmetric one's work; docs/performance.md, "The node-block LU against
+/// faer").
 const BLOCK_LU_MAX_GENERAL: usize = 15_000;
 /// Krylov iterations a reused factor gets before the matrix is refactorised.
 const REUSE_ITERATIONS: usize = 8;
@@ -169,29 +173,15 @@ pub enum LinearMode {
     /// GMRES preconditioned by the Cholesky factor of an earlier Hessian,
     /// refactorised only when it stops converging in 8 iterations (the
     /// Hessian changes little from one Newton iteration and step to the
-    /// next). On the 20x20 pedestal it cuts the factorisations by 3 without
-    /// saving time (docs/performance.md); meant for larger meshes.
+    /// next). On small meshes it saves factorisations but not time
+    /// (docs/performance.md, "Linear-solver modes on the pedestal"); meant
+    /// for larger meshes.
     Reuse,
     /// Conjugate gradients (GMRES when not symmetric) preconditioned by a
     /// smoothed-aggregation multigrid V-cycle ([`super::amg`]): no
     /// factorisation but the coarsest level's; cost per solve about linear
     /// in the mesh size. Block-Jacobi CG/GMRES is the fallback.
     Iterative,
-}
-
-/// A linear solve that could not be done.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum LinearSolveError {
-    /// The matrix is singular (LU found no pivot, or the solution is not finite).
-    #[error("the Hessian is singular ({detail})")]
-    Singular {
-        /// What the factorisation reported.
-        detail: String,
-    },
-    /// faer failed for another reason (memory, structure).
-    #[error("the sparse factorisation failed: {0}")]
-    Factorization(String),
 }
 
 /// Linear solver bound to one sparsity pattern: the policy of the module
@@ -339,6 +329,17 @@ impl LinearSolver {
         symmetric: bool,
         rhs: &mut [f64],
     ) -> Result<Factorization, LinearSolveError> {
+        self.solve_matrix(values, symmetric, rhs)
+            .map_err(|failure| failure.of(Matrix::Hessian))
+    }
+
+    /// [`LinearSolver::solve`], for any matrix: why it failed.
+    fn solve_matrix(
+        &mut self,
+        values: &[f64],
+        symmetric: bool,
+        rhs: &mut [f64],
+    ) -> Result<Factorization, SolveFailure> {
         self.last_krylov_iterations = 0;
         self.last_used = None;
         self.stats.solves += 1;
@@ -359,7 +360,7 @@ impl LinearSolver {
         values: &[f64],
         symmetric: bool,
         rhs: &[f64],
-    ) -> Result<Option<Factorization>, LinearSolveError> {
+    ) -> Result<Option<Factorization>, SolveFailure> {
         let n = self.dimension();
         let mode = match self.mode {
             LinearMode::Auto if n > AUTO_ITERATIVE_ABOVE => LinearMode::Reuse,
@@ -417,15 +418,12 @@ impl LinearSolver {
         values: &[f64],
         symmetric: bool,
         b: &[f64],
-    ) -> Result<bool, LinearSolveError> {
+    ) -> Result<bool, SolveFailure> {
         if self.block_lu.is_none() {
             let Some((ptr, rows)) = &self.node_graph else {
                 return Ok(false);
             };
-            self.block_lu = Some(
-                BlockLu::new(ptr, rows)
-                    .map_err(|e| LinearSolveError::Factorization(e.to_string()))?,
-            );
+            self.block_lu = Some(BlockLu::new(ptr, rows).map_err(SolveFailure::BlockLu)?);
         }
         let lu = self.block_lu.as_mut().expect("set above");
         self.stats.block_lu_factorizations += 1;
@@ -531,7 +529,7 @@ impl LinearSolver {
         values: &[f64],
         symmetric: bool,
         rhs: &[f64],
-    ) -> Result<Option<Factorization>, LinearSolveError> {
+    ) -> Result<Option<Factorization>, SolveFailure> {
         self.factor_kept = self.factor_symmetric_part(values, symmetric)?;
         if !self.factor_kept {
             return Ok(None);
@@ -549,12 +547,11 @@ impl LinearSolver {
 
     /// Sparse LU, the last resort: refused above [`AUTO_ITERATIVE_ABOVE`]
     /// unknowns.
-    fn solve_lu(&mut self, values: &[f64], rhs: &[f64]) -> Result<Factorization, LinearSolveError> {
+    fn solve_lu(&mut self, values: &[f64], rhs: &[f64]) -> Result<Factorization, SolveFailure> {
         if self.dimension() > AUTO_ITERATIVE_ABOVE {
-            return Err(LinearSolveError::Singular {
-                detail: format!(
-                    "no iterative or Cholesky solve converged, and sparse LU is not tried above {AUTO_ITERATIVE_ABOVE} unknowns"
-                ),
+            return Err(SolveFailure::BeyondLu {
+                dimension: self.dimension(),
+                limit: AUTO_ITERATIVE_ABOVE,
             });
         }
         self.load_rhs(rhs);
@@ -575,7 +572,7 @@ impl LinearSolver {
         values: &[f64],
         rhs: &mut [f64],
         used: Factorization,
-    ) -> Result<(), LinearSolveError> {
+    ) -> Result<(), SolveFailure> {
         let b_norm = norm(rhs);
         // (The block LU has checked its residual already.)
         let residual = if used == Factorization::BlockLu {
@@ -588,17 +585,12 @@ impl LinearSolver {
             *x = self.rhs[(i, 0)];
         }
         if rhs.iter().any(|x| !x.is_finite()) {
-            return Err(LinearSolveError::Singular {
-                detail: "the solution is not finite".into(),
-            });
+            return Err(SolveFailure::NotFinite { method: used });
         }
         if residual.is_nan() || (used.is_direct() && residual > 1e-6 * b_norm) {
-            return Err(LinearSolveError::Singular {
-                detail: format!(
-                    "the {} solve leaves a relative residual of {:.1e}",
-                    used.label(),
-                    residual / b_norm
-                ),
+            return Err(SolveFailure::Residual {
+                method: used,
+                relative: residual / b_norm,
             });
         }
         Ok(())
@@ -645,8 +637,8 @@ impl LinearSolver {
     /// level's 3x3 blocks, and CG's products use them: they are the
     /// products of the later solves, and the first step's multigrid build
     /// then refills an array that set-up has already written (the first
-    /// write of fresh memory is slow here: about 0.3 s for the 250 MB of a
-    /// million elements).
+    /// write of fresh memory is slow on some machines: docs/performance.md,
+    /// "Fresh memory").
     pub fn solve_mass(&mut self, values: &[f64], rhs: &mut [f64]) -> Result<(), LinearSolveError> {
         self.blocks_current = self.uses_multigrid() && self.load_finest_blocks(values);
         let solved = self
@@ -662,7 +654,9 @@ impl LinearSolver {
             }
             return Ok(());
         }
-        self.solve(values, true, rhs).map(|_| ())
+        self.solve_matrix(values, true, rhs)
+            .map(|_| ())
+            .map_err(|failure| failure.of(Matrix::Mass))
     }
 
     /// Whether systems of this size and mode go to the multigrid path.
@@ -689,7 +683,7 @@ impl LinearSolver {
 
     /// Factorises `values` (lower triangle read) by Cholesky into the kept
     /// storage; `Ok(false)` when the matrix is not positive definite.
-    fn factor_cholesky(&mut self, values: &[f64]) -> Result<bool, LinearSolveError> {
+    fn factor_cholesky(&mut self, values: &[f64]) -> Result<bool, SolveFailure> {
         let pattern = self.pattern.as_ref();
         self.cholesky.analyse(pattern)?;
         self.stats.cholesky_factorizations += 1;
@@ -705,7 +699,7 @@ impl LinearSolver {
         &mut self,
         values: &[f64],
         symmetric: bool,
-    ) -> Result<bool, LinearSolveError> {
+    ) -> Result<bool, SolveFailure> {
         if symmetric {
             return self.factor_cholesky(values);
         }
@@ -841,6 +835,41 @@ pub(super) mod tests {
                 assert!(residual(&cp, &ri, &v, &x, &b) < 1e-12);
             }
         }
+    }
+
+    /// A singular matrix (row and column 2 of the tridiagonal zeroed) is
+    /// an error naming the matrix: the Hessian from `solve`, the mass
+    /// matrix from `solve_mass` (whose conjugate gradients fail first).
+    #[test]
+    fn a_singular_matrix_is_named_in_the_error() {
+        let n = 6;
+        let (cp, ri, mut v) = tridiagonal(n, 0.0);
+        for c in 0..n {
+            for k in cp[c]..cp[c + 1] {
+                if c == 2 || ri[k] == 2 {
+                    v[k] = 0.0;
+                }
+            }
+        }
+        let b = vec![1.0; n];
+        let e = LinearSolver::new(&cp, &ri)
+            .unwrap()
+            .solve(&v, true, &mut b.clone())
+            .unwrap_err();
+        assert_eq!(e.matrix, Matrix::Hessian);
+        assert!(
+            e.to_string().starts_with("the Hessian is singular ("),
+            "{e}"
+        );
+        let e = LinearSolver::new(&cp, &ri)
+            .unwrap()
+            .solve_mass(&v, &mut b.clone())
+            .unwrap_err();
+        assert_eq!(e.matrix, Matrix::Mass);
+        assert!(
+            e.to_string().starts_with("the mass matrix is singular ("),
+            "{e}"
+        );
     }
 
     /// The transpose map of a tridiagonal pattern.

@@ -2,7 +2,8 @@
 //! §1.7).
 //!
 //! One file per verb: [`pattern`] lays out the Hessian; [`linear`]
-//! chooses how to solve a system and checks the solution, with the
+//! chooses how to solve a system and checks the solution (its errors in
+//! `linear_error`), with the
 //! factorisations (`direct`, [`block_lu`]), the Krylov methods (`krylov`),
 //! their preconditioners (`precondition`, [`amg`]) and the products by
 //! the matrix (`product`) doing the work; [`newton`] iterates.
@@ -12,11 +13,13 @@ pub mod block_lu;
 mod direct;
 mod krylov;
 pub mod linear;
+mod linear_error;
 pub mod newton;
 pub mod pattern;
 mod precondition;
 mod product;
 
-pub use linear::{Factorization, LinearMode, LinearSolveError, LinearSolver, LinearStats};
+pub use linear::{Factorization, LinearMode, LinearSolver, LinearStats};
+pub use linear_error::{FactorStage, FaerFailure, LinearSolveError, Matrix, SolveFailure};
 pub use newton::{NewtonError, NewtonReport, NewtonSettings};
 pub use pattern::SparsePattern;

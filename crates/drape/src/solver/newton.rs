@@ -281,6 +281,137 @@ fn converged(settings: &NewtonSettings, increment: f64, residual: f64, scale: f6
         || increment <= STALLED
 }
 
+/// Whether the iteration ends before iteration `it`: `Ok(true)` when it
+/// has converged ([`converged`]), an error when its residual is not finite
+/// or above `diverged_above` (after the first iteration), or when it is
+/// out of iterations.
+fn ended(
+    settings: &NewtonSettings,
+    it: usize,
+    residual: f64,
+    increment: f64,
+    scale: f64,
+    diverged_above: f64,
+) -> Result<bool, NewtonError> {
+    if !residual.is_finite() {
+        return Err(NewtonError::NonFinite { iteration: it });
+    }
+    if converged(settings, increment, residual, scale) {
+        return Ok(true);
+    }
+    if residual > diverged_above && it > 0 {
+        return Err(NewtonError::Diverged {
+            iteration: it,
+            residual,
+        });
+    }
+    if it >= settings.max_iterations {
+        return Err(NewtonError::NotConverged {
+            iterations: it,
+            residual,
+            increment,
+        });
+    }
+    Ok(false)
+}
+
+/// The line search along `ws.dy` from `ws.y_old` (the module docs): a
+/// full step, halved while it neither lowers the residual below
+/// `residual` nor, with an energy (`energy0` and the direction's `slope`),
+/// meets Armijo's condition — down to 1/16 of the step (1/1024 with an
+/// energy), which is taken whatever it gives. `y` and `eval` are left at
+/// the step taken, its Hessian assembled if `hessian_at_trial` and the
+/// full step was taken. Returns the step's fraction `alpha`, its residual
+/// and whether its Hessian was assembled.
+fn backtrack(
+    system: &mut impl NewtonSystem,
+    y: &mut [f64],
+    ws: &mut NewtonWorkspace,
+    eval: &mut Evaluation,
+    (energy0, slope): (Option<f64>, f64),
+    residual: f64,
+    mut hessian_at_trial: bool,
+) -> (f64, f64, bool) {
+    let shortest = if energy0.is_some() {
+        1.0 / 1024.0
+    } else {
+        1.0 / 16.0
+    };
+    let mut alpha = 1.0;
+    loop {
+        for ((yi, y0), d) in y.iter_mut().zip(&ws.y_old).zip(&ws.dy) {
+            *yi = y0 + alpha * d;
+        }
+        *eval = if hessian_at_trial {
+            system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]))
+        } else {
+            system.evaluate(y, &mut ws.g, None)
+        };
+        let trial = eval.merit.unwrap_or_else(|| norm(&ws.g));
+        // With an energy, a smaller residual counts only where the
+        // energy did not rise beyond its round-off (near the solution,
+        // where Armijo's decrease drowns in it); Armijo's condition
+        // counts on its own.
+        let (armijo, not_higher) = match (energy0, eval.energy) {
+            (Some(e0), Some(e1)) => (
+                slope < 0.0 && e1 <= e0 + 1e-4 * alpha * slope,
+                e1 <= e0 + 1e-12 * e0.abs(),
+            ),
+            _ => (false, true),
+        };
+        let smaller = trial <= (1.0 - 1e-4 * alpha) * residual && not_higher;
+        if (trial.is_finite() && (smaller || armijo)) || alpha <= shortest {
+            return (alpha, trial, hessian_at_trial);
+        }
+        alpha *= 0.5;
+        // (A shortened step is accepted with a residual only.)
+        hessian_at_trial = false;
+    }
+}
+
+/// The Newton direction `ws.dy = -H^-1 G` with the Hessian and residual
+/// in `ws`, transformed by the system; `relative` is `|G| / |G_0|`.
+fn direction(
+    system: &mut impl NewtonSystem,
+    ws: &mut NewtonWorkspace,
+    report: &mut NewtonReport,
+    symmetric: bool,
+    relative: f64,
+) -> Result<(), NewtonError> {
+    for (d, g) in ws.dy.iter_mut().zip(&ws.g) {
+        *d = -g;
+    }
+    // Inexact Newton (Eisenstat & Walker 1996): Krylov solves need only
+    // reduce their residual as far as Newton's has fallen since the
+    // step's first iterate, so the tolerance is |G| / |G_0| (keeping
+    // quadratic convergence), between 1e-4 and 1e-12.
+    ws.linear.krylov_tolerance = relative.clamp(1e-12, 1e-4);
+    report.factorization = Some(ws.linear.solve(&ws.h, symmetric, &mut ws.dy)?);
+    system.transform_increment(&mut ws.dy);
+    Ok(())
+}
+
+/// Whether a Newton step of fraction `alpha` contracts fast enough for
+/// chord steps to follow: a full step at most a quarter of the one before
+/// (`increments`: before, now), or one that cut the residual a
+/// hundredfold (`residuals`: before, now) — the local regime where the
+/// Hessian changes little. Far from it a chord step can carry the iterate
+/// to another root (seen on an undamped swinging cloth whose elements
+/// approach SVK's compressive instability). The residual test catches the
+/// step after a linear phase: where wrinkling states or contacts switched
+/// between the first iterates, the second increment is only a few times
+/// smaller than the first, yet the residual falls by orders of magnitude
+/// and the next increment is at the tolerance. A step's first Newton step
+/// has no step before it, so only the residual test applies to it (an
+/// infinite "step before" once let chord steps follow every first
+/// iteration, to be rejected at once: docs/performance.md).
+fn contracts(alpha: f64, increments: (f64, f64), residuals: (f64, f64)) -> bool {
+    let ((previous, increment), (previous_residual, residual)) = (increments, residuals);
+    alpha == 1.0
+        && ((previous.is_finite() && increment <= 0.25 * previous)
+            || residual <= 0.01 * previous_residual)
+}
+
 /// Runs Newton from the first guess in `y` (overwritten by the solution).
 /// `length`: the reference length `|X|` of the convergence test (m).
 pub fn solve(
@@ -302,42 +433,27 @@ pub fn solve(
     let mut have_hessian = true;
     let mut residual = eval.merit.unwrap_or_else(|| norm(&ws.g));
     report.residuals.push(residual);
-    let (r0, scale0) = (residual, eval.scale);
+    let r0 = residual;
+    // The residual beyond which the iteration has diverged.
+    let diverged_above = 1e8 * r0.max(eval.scale);
     let mut increment = f64::INFINITY;
     loop {
         let it = report.iterations + report.chord_steps;
-        if !residual.is_finite() {
-            return Err(NewtonError::NonFinite { iteration: it });
-        }
-        if converged(settings, increment, residual, eval.scale) {
+        if ended(
+            settings,
+            it,
+            residual,
+            increment,
+            eval.scale,
+            diverged_above,
+        )? {
             return Ok(report);
-        }
-        if residual > 1e8 * r0.max(scale0) && it > 0 {
-            return Err(NewtonError::Diverged {
-                iteration: it,
-                residual,
-            });
-        }
-        if it >= settings.max_iterations {
-            return Err(NewtonError::NotConverged {
-                iterations: it,
-                residual,
-                increment,
-            });
         }
         if !have_hessian {
             eval = system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]));
         }
-        for (d, g) in ws.dy.iter_mut().zip(&ws.g) {
-            *d = -g;
-        }
-        // Inexact Newton (Eisenstat & Walker 1996): Krylov solves need only
-        // reduce their residual as far as Newton's has fallen since the
-        // step's first iterate, so the tolerance is |G| / |G_0| (keeping
-        // quadratic convergence), between 1e-4 and 1e-12.
-        ws.linear.krylov_tolerance = (residual / r0.max(f64::MIN_POSITIVE)).clamp(1e-12, 1e-4);
-        report.factorization = Some(ws.linear.solve(&ws.h, eval.symmetric, &mut ws.dy)?);
-        system.transform_increment(&mut ws.dy);
+        let relative = residual / r0.max(f64::MIN_POSITIVE);
+        direction(system, ws, &mut report, eval.symmetric, relative)?;
         // Backtracking on |G|: full steps as long as they reduce the
         // residual (always, near a solution); halved up to four times where
         // the residual is only piecewise smooth (contact entering and
@@ -357,10 +473,10 @@ pub fn solve(
         // loop instead of two). Not when chord steps are likely to be tried
         // first: they reuse the factorisation just made, and a Hessian
         // assembled for nothing costs more than a second evaluation of the
-        // residual when they are not (the pedestal: 2-3 % faster than
-        // expecting chord steps only after a fourfold shrink, the
-        // hanging cloth, the drape tester and the multipliers alike).
-        let mut hessian_at_trial = full_increment > settings.tolerance && !chord_ahead;
+        // residual when they are not (measured against expecting chord
+        // steps only after a fourfold shrink: docs/performance.md, "The
+        // round before").
+        let hessian_at_trial = full_increment > settings.tolerance && !chord_ahead;
         // With an energy, Armijo's condition on it (the incremental
         // potential's decrease along the Newton direction, whose slope is
         // G . dY) accepts a step as well as a smaller residual does, and
@@ -372,43 +488,16 @@ pub fn solve(
         } else {
             0.0
         };
-        let shortest = if energy0.is_some() {
-            1.0 / 1024.0
-        } else {
-            1.0 / 16.0
-        };
-        let mut alpha = 1.0;
-        loop {
-            for ((yi, y0), d) in y.iter_mut().zip(&ws.y_old).zip(&ws.dy) {
-                *yi = y0 + alpha * d;
-            }
-            eval = if hessian_at_trial {
-                system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]))
-            } else {
-                system.evaluate(y, &mut ws.g, None)
-            };
-            let trial = eval.merit.unwrap_or_else(|| norm(&ws.g));
-            // With an energy, a smaller residual counts only where the
-            // energy did not rise beyond its round-off (near the solution,
-            // where Armijo's decrease drowns in it); Armijo's condition
-            // counts on its own.
-            let (armijo, not_higher) = match (energy0, eval.energy) {
-                (Some(e0), Some(e1)) => (
-                    slope < 0.0 && e1 <= e0 + 1e-4 * alpha * slope,
-                    e1 <= e0 + 1e-12 * e0.abs(),
-                ),
-                _ => (false, true),
-            };
-            let smaller = trial <= (1.0 - 1e-4 * alpha) * residual && not_higher;
-            if (trial.is_finite() && (smaller || armijo)) || alpha <= shortest {
-                residual = trial;
-                break;
-            }
-            alpha *= 0.5;
-            // (A shortened step is accepted with a residual only.)
-            hessian_at_trial = false;
-        }
-        have_hessian = hessian_at_trial;
+        let alpha;
+        (alpha, residual, have_hessian) = backtrack(
+            system,
+            y,
+            ws,
+            &mut eval,
+            (energy0, slope),
+            residual,
+            hessian_at_trial,
+        );
         report.residuals.push(residual);
         increment = alpha * norm(&ws.dy) / length;
         report.increments.push(increment);
@@ -423,23 +512,7 @@ pub fn solve(
             increment = f64::INFINITY;
             continue;
         }
-        // Chord steps only where Newton already contracts fast: a full
-        // step at most a quarter of the one before, or one that cut the
-        // residual a hundredfold — the local regime where the Hessian
-        // changes little. Far from it a chord step can carry the iterate
-        // to another root (seen on an undamped swinging cloth whose
-        // elements approach SVK's compressive instability). The residual
-        // test catches the step after a linear phase: where wrinkling
-        // states or contacts switched between the first iterates, the
-        // second increment is only a few times smaller than the first,
-        // yet the residual falls by orders of magnitude and the next
-        // increment is at the tolerance. A step's first Newton step has
-        // no step before it, so only the residual test applies to it
-        // (an infinite "step before" once let chord steps follow every
-        // first iteration, to be rejected at once: docs/performance.md).
-        if alpha == 1.0
-            && ((previous.is_finite() && increment <= 0.25 * previous)
-                || residual <= 0.01 * previous_residual)
+        if contracts(alpha, (previous, increment), (previous_residual, residual))
             && chord_steps(
                 system,
                 y,

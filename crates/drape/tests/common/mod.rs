@@ -158,7 +158,7 @@ pub fn sheared_equilibrium(s: &mut Setup, gamma: f64) -> (Vec<f64>, f64) {
         .collect();
     let mut start = sheared.clone();
     for (i, v) in start.iter_mut().enumerate() {
-        if !s.model.fixed[i] {
+        if !s.model.fixed()[i] {
             *v += 1e-3 * ((i * 7) as f64).sin();
         }
     }

@@ -21,7 +21,8 @@ pub struct BendingTerm<'a> {
 
 impl<'a> BendingTerm<'a> {
     /// The term of `bending`, adding its Hessian on `pattern` (the
-    /// pattern [`Bending::attach`] was given).
+    /// model's [`Model::pattern`](crate::model::Model::pattern), which holds
+    /// the bending stencils).
     pub fn new(bending: &'a Bending, pattern: &'a SparsePattern) -> Self {
         Self {
             bending,
@@ -73,10 +74,10 @@ mod tests {
     use crate::material::SaintVenantKirchhoff;
     use crate::mesh::generate::{Pattern, rectangle};
     use crate::mesh::{ElementOrder, Mesh};
-    use crate::model::{MassKind, Model};
+    use crate::model::Model;
 
     fn model(mesh: Mesh, rigidity: BendingRigidity) -> Model {
-        Model::new(
+        Model::builder(
             mesh,
             Box::new(SaintVenantKirchhoff::new(2e6, 0.3)),
             Section {
@@ -84,11 +85,9 @@ mod tests {
                 prestress: 0.0,
             },
             320.0,
-            vec![],
-            vec![],
-            MassKind::Consistent,
         )
-        .and_then(|m| m.with_bending(rigidity))
+        .bending(rigidity)
+        .build()
         .expect("a valid model")
     }
 
@@ -151,11 +150,11 @@ mod tests {
             for rigidity in rigidities {
                 let mesh = rectangle([0.1, 0.1], [4, 3], Pattern::Alternate, [0.0; 3], order);
                 let m = model(mesh, rigidity);
-                let bending = m.bending.as_ref().expect("bending");
+                let bending = m.bending().expect("bending");
                 for fold in [0.0, 1e-3, 1.0, 3.0] {
                     let y = folded(&m, fold);
-                    let mut term = BendingTerm::new(bending, &m.pattern);
-                    let (eh, eg) = check_term(&mut term, &ctx, &m.pattern, &y, 1e-7);
+                    let mut term = BendingTerm::new(bending, m.pattern());
+                    let (eh, eg) = check_term(&mut term, &ctx, m.pattern(), &y, 1e-7);
                     assert!(
                         eh < 1e-6,
                         "{order:?} {rigidity:?} fold {fold}: Hessian {eh:e}"

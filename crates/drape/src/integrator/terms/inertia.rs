@@ -93,7 +93,7 @@ mod tests {
                 time: 0.0,
                 contact: None,
             };
-            let (eh, eg) = check_term(&mut term, &ctx, &model.pattern, &y, 1e-6);
+            let (eh, eg) = check_term(&mut term, &ctx, model.pattern(), &y, 1e-6);
             assert!(eh < 1e-8, "order {order}: Hessian {eh:e}");
             assert!(eg < 1e-6, "order {order}: gradient {eg:e}");
         }

@@ -103,7 +103,7 @@ mod tests {
                     time: 1.0,
                     contact: None,
                 };
-                let (eh, eg) = check_term(&mut term, &ctx, &model.pattern, &y, 1e-7);
+                let (eh, eg) = check_term(&mut term, &ctx, model.pattern(), &y, 1e-7);
                 // Without pressure the Hessian is zero: errors relative to
                 // the checker's floor.
                 assert!(eh < 1e-6, "order {order}, p {pressure}: Hessian {eh:e}");

@@ -53,7 +53,7 @@ impl StepTerm for MembraneTerm<'_> {
         let value = model.assemble(y, g, h);
         TermValue {
             value,
-            potential: model.material.is_hyperelastic(),
+            potential: model.material().is_hyperelastic(),
             scale: norm(g),
         }
     }
@@ -108,7 +108,7 @@ mod tests {
                     contact: None,
                 };
                 let mut term = MembraneTerm::new(&model);
-                let (eh, eg) = check_term(&mut term, &ctx, &model.pattern, &y, 1e-7);
+                let (eh, eg) = check_term(&mut term, &ctx, model.pattern(), &y, 1e-7);
                 assert!(eh < 1e-6, "order {order}: Hessian {eh:e}");
                 assert!(eg < 1e-6, "order {order}: gradient {eg:e}");
                 let mut g = vec![0.0; y.len()];

@@ -17,7 +17,7 @@ pub use membrane::MembraneTerm;
 pub use penalty::PenaltyTerm;
 
 #[cfg(test)]
-pub(crate) use check::{check_term, deformed, patch_model};
+pub(crate) use check::{check_term, deformed, patch_builder, patch_model};
 
 #[cfg(test)]
 mod check {
@@ -28,7 +28,7 @@ mod check {
     use crate::material::Material;
     use crate::mesh::ElementOrder;
     use crate::mesh::generate::{Pattern, rectangle};
-    use crate::model::{MassKind, Model};
+    use crate::model::{Model, ModelBuilder};
     use crate::solver::SparsePattern;
 
     /// A 10 cm square of 3 x 2 squares (12 triangles) of `order` (1–3),
@@ -38,25 +38,28 @@ mod check {
         material: Box<dyn Material>,
         loads: Vec<Load>,
     ) -> Model {
+        patch_builder(order, material, loads)
+            .build()
+            .expect("a valid mesh")
+    }
+
+    /// The parts of [`patch_model`], to add to.
+    pub(crate) fn patch_builder(
+        order: usize,
+        material: Box<dyn Material>,
+        loads: Vec<Load>,
+    ) -> ModelBuilder {
         let order = match order {
             1 => ElementOrder::Linear,
             2 => ElementOrder::Quadratic,
             _ => ElementOrder::Cubic,
         };
         let mesh = rectangle([0.1, 0.1], [3, 2], Pattern::Alternate, [0.0; 3], order);
-        Model::new(
-            mesh,
-            material,
-            Section {
-                thickness: 6e-4,
-                prestress: 0.0,
-            },
-            320.0,
-            loads,
-            Vec::new(),
-            MassKind::Consistent,
-        )
-        .expect("a valid mesh")
+        let section = Section {
+            thickness: 6e-4,
+            prestress: 0.0,
+        };
+        Model::builder(mesh, material, section, 320.0).loads(loads)
     }
 
     /// The patch stretched along x, compressed along y (so wrinkling

@@ -105,7 +105,7 @@ segments = [{ steps = 1, dt = 1e-3 }]
             .and_then(|s| s.build(path, text))
             .expect("a valid scenario");
         let model = &setup.model;
-        let contact = model.contact.as_ref().expect("an obstacle");
+        let contact = model.contact().expect("an obstacle");
         let y: Vec<f64> = model
             .initial_positions()
             .chunks(3)
@@ -116,10 +116,10 @@ segments = [{ steps = 1, dt = 1e-3 }]
             time: 0.0,
             contact: Some(&state),
         };
-        let mut term = PenaltyTerm::new(contact, &model.pattern, 5.0e4);
+        let mut term = PenaltyTerm::new(contact, model.pattern(), 5.0e4);
         let mut g = vec![0.0; y.len()];
         assert!(term.add(&ctx, &y, &mut g, None).value > 0.0);
-        let (eh, eg) = check_term(&mut term, &ctx, &model.pattern, &y, 1e-7);
+        let (eh, eg) = check_term(&mut term, &ctx, model.pattern(), &y, 1e-7);
         assert!(eh < 1e-6, "Hessian {eh:e}");
         assert!(eg < 1e-6, "gradient {eg:e}");
     }

@@ -70,9 +70,20 @@ pub enum BlockLuError {
         /// The (original) node index of the pivot.
         node: usize,
     },
+    /// The node graph is not symmetric: node `row` is in column
+    /// `column`, but `column` is not in column `row`.
+    #[error(
+        "the node graph is not symmetric: node {row} couples to node {column}, but not node {column} to node {row}"
+    )]
+    NotSymmetric {
+        /// A node of the column.
+        row: usize,
+        /// The column.
+        column: usize,
+    },
     /// The fill-reducing ordering failed.
     #[error("the minimum degree ordering failed: {0}")]
-    Ordering(String),
+    Ordering(super::linear_error::FaerFailure),
 }
 
 /// Where block `(I, J)` of the permuted matrix sits in the scalar CSC
@@ -243,10 +254,10 @@ impl BlockLu {
     /// then factorise independently, on two threads
     /// ([`crate::par::join`]). The split is kept when it leaves the
     /// longer of the two paths (a half, then the separator) at most 70 %
-    /// of AMD's work and adds at most 20 % to the total (the 20x20
-    /// pedestal: 2.36 M multiply–adds with AMD, 2.52 M split, of which
-    /// 1.32 M on the longer path). Whether it is split depends on the
-    /// graph alone, never on the machine, so results do not either.
+    /// of AMD's work and adds at most 20 % to the total (the pedestal's
+    /// counts: docs/performance.md, "The round before"). Whether it is
+    /// split depends on the graph alone, never on the machine, so results
+    /// do not either.
     pub fn new(node_ptr: &[usize], node_rows: &[usize]) -> Result<Self, BlockLuError> {
         let n = node_ptr.len() - 1;
         let (perm, perm_inv) = amd_order(node_ptr, node_rows)?;
@@ -349,9 +360,8 @@ impl BlockLu {
     /// separator; the sums are the same whichever thread runs a half.
     /// The block updates run as AVX-512 intrinsics where the CPU has
     /// AVX-512 F and VL, else compiled for AVX2 and FMA, else portable;
-    /// all three give the same bits (the private `updates`). The pedestal's
-    /// non-symmetric Hessian: 0.15 ms on two threads, 0.27 ms on one
-    /// (docs/performance.md).
+    /// all three give the same bits (the private `updates`). Timings:
+    /// docs/performance.md, "The node-block LU against faer".
     pub fn factorize(&mut self, values: &[f64], symmetric: bool) -> Result<(), BlockLuError> {
         let sym = &self.sym;
         let n = sym.nodes();

@@ -6,8 +6,8 @@
 
 use super::{BlockLuError, NONE, Source, Symbolic};
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::amd;
+use faer::sparse::{FaerError, SymbolicSparseColMatRef};
 use std::ops::Range;
 
 /// Below this many nodes the ordering is not split in two.
@@ -55,9 +55,7 @@ impl Symbolic {
                     // Block (J, I) = (b, a) of A: position of b in column a.
                     let q = node_rows[node_ptr[a]..node_ptr[a + 1]]
                         .binary_search(&b)
-                        .map_err(|_| {
-                            BlockLuError::Ordering("the node graph is not symmetric".into())
-                        })?;
+                        .map_err(|_| BlockLuError::NotSymmetric { row: a, column: b })?;
                     let deg_a = node_ptr[a + 1] - node_ptr[a];
                     upper.push((
                         i_new,
@@ -124,7 +122,7 @@ pub(super) fn amd_order(
     }
     let graph = SymbolicSparseColMatRef::new_checked(n, n, node_ptr, None, node_rows);
     let mut mem = MemBuffer::try_new(amd::order_scratch::<usize>(n, node_rows.len()))
-        .map_err(|e| BlockLuError::Ordering(format!("{e:?}")))?;
+        .map_err(|e| BlockLuError::Ordering(FaerError::from(e).into()))?;
     amd::order(
         &mut perm,
         &mut perm_inv,
@@ -132,7 +130,7 @@ pub(super) fn amd_order(
         amd::Control::default(),
         MemStack::new(&mut mem),
     )
-    .map_err(|e| BlockLuError::Ordering(format!("{e:?}")))?;
+    .map_err(|e| BlockLuError::Ordering(e.into()))?;
     Ok((perm, perm_inv))
 }
 

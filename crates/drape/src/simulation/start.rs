@@ -1,0 +1,286 @@
+//! How a session of a run starts — fresh, from the initial state, or
+//! resumed from the checkpoint in its output directory — and why it may
+//! not ([`SetupError`], [`ResumeError`]).
+
+use super::checkpoint::{Checkpoint, CheckpointError, Counters};
+use super::frames::Snapshot;
+use super::schedule::{ScheduleMismatch, StepController};
+use super::{History, RunError, StepRecord, checkpoint_path, contact_report, history_columns};
+use super::{io_err, setup_failure};
+use crate::integrator::State;
+use crate::integrator::newmark::DynamicWorkspace;
+use crate::output::history::HistoryWriter;
+use crate::output::pvd::{PvdWriter, frame_relative_path};
+use crate::scenario::{Analysis, InputFile, Setup};
+use crate::solver::LinearSolveError;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Why a run could not start: nothing was stepped, and `summary.json`
+/// says so (0 steps).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SetupError {
+    /// The linear solver could not be set up on the model's pattern.
+    #[error("{0}")]
+    LinearSolver(LinearSolveError),
+    /// The initial acceleration could not be solved for.
+    #[error("the initial acceleration M^-1 (F_ext - F_int) cannot be computed: {0}")]
+    InitialAcceleration(LinearSolveError),
+    /// The adaptive step controller cannot start on the schedule.
+    #[error("{0}")]
+    Schedule(ScheduleMismatch),
+    /// The thread writing the field frames could not be started.
+    #[error("cannot start the thread writing the field frames: {0}")]
+    FrameThread(std::io::Error),
+}
+
+/// Why a run cannot resume from its output directory; each names the
+/// file at fault.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ResumeError {
+    /// The checkpoint cannot be read, or does not fit the scenario, its
+    /// input files or its model (the error names the field or the file).
+    #[error("{}: {error}", path.display())]
+    Checkpoint {
+        /// The checkpoint file.
+        path: PathBuf,
+        /// What is wrong with it.
+        error: CheckpointError,
+    },
+    /// The checkpoint's place in the adaptive schedule is not in the
+    /// scenario's schedule.
+    #[error("{}: {error}", path.display())]
+    Schedule {
+        /// The checkpoint file.
+        path: PathBuf,
+        /// The place that does not fit.
+        error: ScheduleMismatch,
+    },
+    /// A frame the checkpoint lists is not on disk.
+    #[error(
+        "{}: the frame {} it lists is missing: the collection would name a file that is not there; restore the frames, or start a fresh run (without --resume)",
+        checkpoint.display(),
+        frame.display()
+    )]
+    MissingFrame {
+        /// The checkpoint file.
+        checkpoint: PathBuf,
+        /// The missing frame.
+        frame: PathBuf,
+    },
+    /// The history cannot be cut back to the checkpoint's rows.
+    #[error("{}: {error}", path.display())]
+    History {
+        /// The history file.
+        path: PathBuf,
+        /// Why.
+        error: std::io::Error,
+    },
+}
+
+impl From<ResumeError> for RunError {
+    fn from(e: ResumeError) -> Self {
+        RunError::Resume(e)
+    }
+}
+
+/// Before a resume is set up: each input file the checkpoint in `out`
+/// recorded (the mesh, the obstacles' meshes) must still hold the bytes it
+/// had, or the resume is refused naming the file — changed, missing or
+/// unreadable. A checkpoint that cannot be read, or one that recorded no
+/// files (version 3), passes: [`run_with`](super::run_with) reports the
+/// former, and checks the scenario's files again against the checkpoint
+/// when it resumes.
+///
+/// The check comes before the scenario is built, so that a changed file
+/// is reported as such rather than as an error of its contents (a mesh
+/// that no longer reads) or of the model's sizes.
+pub fn check_resume_inputs(out: &Path) -> Result<(), RunError> {
+    let path = checkpoint_path(out);
+    let Ok(bytes) = std::fs::read(&path) else {
+        return Ok(());
+    };
+    let Ok(Some(inputs)) = Checkpoint::recorded_inputs(&bytes) else {
+        return Ok(());
+    };
+    for input in inputs {
+        let error = match InputFile::hash_file(&input.path) {
+            Ok(hash) if hash == input.hash => continue,
+            Ok(_) => CheckpointError::InputChanged {
+                key: input.key,
+                recorded: input.path.clone(),
+                path: input.path,
+            },
+            Err(error) => CheckpointError::InputMissing {
+                key: input.key,
+                path: input.path,
+                error,
+            },
+        };
+        return Err(ResumeError::Checkpoint { path, error }.into());
+    }
+    Ok(())
+}
+
+/// Where a session starts: the state, and what the loop keeps of the run
+/// so far.
+pub(super) struct Start<'a> {
+    pub(super) state: State,
+    pub(super) counters: Counters,
+    /// The step controller of adaptive steps.
+    pub(super) controller: Option<StepController>,
+    pub(super) history: History<'a>,
+    pub(super) pvd: PvdWriter,
+    /// The frames handed to the writer thread, `(time, step)`.
+    pub(super) written: Vec<(f64, usize)>,
+    /// A fresh run's initial frame, still to hand to the writer thread.
+    pub(super) initial_frame: Option<Snapshot>,
+}
+
+/// A resumed session: the checkpoint in `out` read and checked against
+/// `setup` (and the frames it lists found on disk) before the history
+/// and the collection are cut back to it; `ws` takes its external forces.
+pub(super) fn resume<'a>(
+    setup: &'a Setup,
+    out: &Path,
+    ws: &mut DynamicWorkspace,
+) -> Result<Start<'a>, RunError> {
+    let path = checkpoint_path(out);
+    let unusable = |error| ResumeError::Checkpoint {
+        path: path.clone(),
+        error,
+    };
+    let bytes = std::fs::read(&path).map_err(|e| unusable(CheckpointError::Io(e)))?;
+    let ck = Checkpoint::read(&bytes, setup).map_err(unusable)?;
+    // Checked before the history and the collection are cut back.
+    let controller =
+        step_controller(setup, &ck.counters).map_err(|error| ResumeError::Schedule {
+            path: path.clone(),
+            error,
+        })?;
+    if let Some((_, k)) = ck
+        .frames
+        .iter()
+        .find(|(_, k)| !out.join(frame_relative_path(*k as u64)).is_file())
+    {
+        return Err(ResumeError::MissingFrame {
+            checkpoint: path,
+            frame: out.join(frame_relative_path(*k as u64)),
+        }
+        .into());
+    }
+    ws.f_ext.copy_from_slice(&ck.external_forces);
+    let entries = ck
+        .frames
+        .iter()
+        .map(|(t, k)| (*t, frame_relative_path(*k as u64)))
+        .collect();
+    let history_path = out.join("history.csv");
+    let history = History {
+        setup,
+        writer: HistoryWriter::resume(
+            &history_path,
+            &history_columns(setup),
+            ck.counters.step.saturating_add(1),
+        )
+        .map_err(|error| ResumeError::History {
+            path: history_path.clone(),
+            error,
+        })?,
+        scratch: vec![0.0; setup.model.dofs()],
+        last: None,
+    };
+    let pvd = PvdWriter::resume(out.join("fields.pvd"), entries).map_err(io_err(out))?;
+    Ok(Start {
+        state: ck.state,
+        counters: ck.counters,
+        controller,
+        history,
+        pvd,
+        written: ck.frames,
+        initial_frame: None,
+    })
+}
+
+/// A fresh session from the initial state `x` at rest (with its initial
+/// acceleration in dynamics): the history's first row written, the
+/// initial frame ready to hand over. A failure writes the summary of the
+/// initial state (`start`: when the run began).
+pub(super) fn fresh<'a>(
+    setup: &'a Setup,
+    out: &Path,
+    ws: &mut DynamicWorkspace,
+    x: &[f64],
+    start: Instant,
+) -> Result<Start<'a>, RunError> {
+    let model = &setup.model;
+    let state = match &setup.analysis {
+        Analysis::Dynamic { newmark, .. } => newmark
+            .initial_state(model, ws)
+            .map_err(|e| setup_failure(setup, out, start, SetupError::InitialAcceleration(e)))?,
+        Analysis::Static { .. } => {
+            ws.f_ext.fill(0.0);
+            State::at_rest(model, x.to_vec())
+        }
+    };
+    let history_path = out.join("history.csv");
+    let mut history = History {
+        setup,
+        writer: HistoryWriter::create(&history_path, &history_columns(setup))
+            .map_err(io_err(&history_path))?,
+        scratch: vec![0.0; model.dofs()],
+        last: None,
+    };
+    let strain0 = model.strain_energy(&state.positions);
+    let (stretch0, fractions0) = model.stretch_and_states(&state.positions);
+    let contact0 = contact_report(model, &state);
+    history.row(
+        &state,
+        &StepRecord {
+            step: 0,
+            dt: 0.0,
+            iterations: 0,
+            strain: strain0,
+            cutbacks: 0,
+            min_stretch: stretch0.0,
+            contact: contact0.clone(),
+            states: fractions0,
+        },
+    )?;
+    let initial_frame = Snapshot::of(0, &state, contact0.as_ref());
+    let counters = Counters {
+        last_strain: strain0,
+        ..Counters::default()
+    };
+    let controller = step_controller(setup, &counters)
+        .map_err(|e| setup_failure(setup, out, start, SetupError::Schedule(e)))?;
+    Ok(Start {
+        state,
+        counters,
+        controller,
+        history,
+        pvd: PvdWriter::new(out.join("fields.pvd")),
+        written: vec![(0.0, 0)],
+        initial_frame: Some(initial_frame),
+    })
+}
+
+/// The step controller of an adaptive run (`None` for fixed steps) where
+/// `counters` left it: a fresh run's start in the first segment at its
+/// `dt`, or a checkpoint's segment and step size, refused (`Err`) when
+/// they do not fit the schedule.
+fn step_controller(
+    setup: &Setup,
+    counters: &Counters,
+) -> Result<Option<StepController>, ScheduleMismatch> {
+    match (&setup.adaptive, &setup.analysis) {
+        (Some(adaptive), Analysis::Dynamic { segments, .. }) => {
+            StepController::new(segments, *adaptive, setup.max_cutbacks)
+                .resume(counters.segment, counters.step_size)
+                .map(Some)
+        }
+        _ => Ok(None),
+    }
+}
