@@ -42,7 +42,12 @@ pub fn warnings(setup: &Setup) -> Vec<String> {
 /// A tension-field wrinkling model together with a bending rigidity.
 fn tension_field_with_bending(setup: &Setup, out: &mut Vec<String>) {
     let model = &setup.model;
-    if model.bending().is_some() && model.material().wrinkle_state(BIAXIAL_COMPRESSION).is_some() {
+    if model.bending().is_some()
+        && model
+            .material()
+            .wrinkle_state(BIAXIAL_COMPRESSION)
+            .is_some()
+    {
         out.push(
             "material.wrinkling is a tension-field model and material.bending_rigidity is set: compressed elements have no in-plane stiffness and, with bending, may collapse, which makes the steps tiny; with bending the mesh resolves the folds, so wrinkling = \"none\" is the model to use (README, \"Bending\")".to_string(),
         );
