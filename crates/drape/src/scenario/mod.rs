@@ -18,6 +18,7 @@
 //! line. `build` checks the values section by section (with `check`;
 //! `locate` finds their lines).
 
+mod analysis;
 mod build;
 mod check;
 mod contact;

@@ -22,6 +22,11 @@
 //! before a checkpoint (which records the frames as written) and before
 //! the summary, so that whatever a run ends with, everything it computed
 //! is on disk when `summary.json` says so.
+//!
+//! A session starts fresh or from the checkpoint (`start.rs`, with why it
+//! may not: [`SetupError`], [`ResumeError`]); `summary.json` is made and
+//! written by `summary.rs`, also for a run that failed before its loop
+//! ([`record_failure`]).
 
 use crate::contact::ContactReport;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -30,6 +35,7 @@ mod checkpoint;
 mod frames;
 pub mod schedule;
 mod start;
+mod summary;
 mod warnings;
 use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
 use crate::integrator::{State, StaticStepper};
@@ -41,12 +47,12 @@ use crate::solver::NewtonError;
 pub use checkpoint::{Checkpoint, CheckpointError, Counters};
 use frames::Snapshot;
 use schedule::{RestWatch, StepController, fastest_node};
-use serde::Serialize;
 use start::Start;
 pub use start::{ResumeError, SetupError, check_resume_inputs};
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+pub use summary::{Summary, record_failure};
+use summary::{initial_summary, summary, write_summary};
 pub use warnings::{MAX_MOTION_PER_STEP, warnings};
 
 /// The stretch below which Saint-Venant–Kirchhoff loses stability in
@@ -81,78 +87,6 @@ pub struct StepInfo {
     pub strain_energy: f64,
     /// Work of the external loads since the start (J).
     pub external_work: f64,
-}
-
-/// `summary.json`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Summary {
-    /// `"completed"`, `"failed"` or `"interrupted"`.
-    pub status: String,
-    /// Human-readable outcome; it says "at rest" when the rest criterion
-    /// ended the run.
-    pub message: String,
-    /// Whether the rest criterion ended the run; absent without a rest
-    /// criterion (`[time] rest`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub at_rest: Option<bool>,
-    /// Scenario title.
-    pub title: String,
-    /// Converged steps.
-    pub steps: usize,
-    /// Final simulated time (s), or load factor in statics.
-    pub time: f64,
-    /// Time of the first step that ended with an active contact, or null.
-    pub first_contact_time: Option<f64>,
-    /// Total Newton iterations.
-    pub newton_iterations: usize,
-    /// Steps that had to be cut back.
-    pub cutbacks: usize,
-    /// Wall-clock time of the run (s).
-    pub wall_seconds: f64,
-    /// Of which: set-up before the first step (s) — linear-solver
-    /// structures, the initial acceleration, the initial outputs (of this
-    /// session, for a resumed run). `wall_seconds - setup_seconds` is the
-    /// time of the steps.
-    pub setup_seconds: f64,
-    /// Of which: the run loop's output work after the set-up (s) — writing
-    /// the history rows, handing the field frames to the thread that
-    /// writes them, and waiting for that thread (when it falls behind,
-    /// before a checkpoint and at the end).
-    /// `wall_seconds - setup_seconds - output_seconds` is the time of the
-    /// mechanics and the solvers.
-    pub output_seconds: f64,
-    /// The time the thread writing the field frames spent on them (s):
-    /// element results, encoding, writing and syncing the VTU files and the
-    /// collection, the initial frame's included. It runs alongside the
-    /// steps and is not part of `wall_seconds`' breakdown; only the part
-    /// the loop waits for shows in `output_seconds`.
-    pub output_thread_seconds: f64,
-    /// Of which: the first step of this session (s), without its outputs;
-    /// it also builds what the linear solver keeps across steps (symbolic
-    /// factorisations, the multigrid hierarchy).
-    pub first_step_seconds: f64,
-    /// Nodes of the mesh.
-    pub nodes: usize,
-    /// Elements of the mesh.
-    pub elements: usize,
-    /// Degrees of freedom (3 per node).
-    pub dofs: usize,
-    /// Fixed components.
-    pub fixed_dofs: usize,
-    /// Final kinetic energy (J).
-    pub kinetic_energy: f64,
-    /// Final strain energy (J).
-    pub strain_energy: f64,
-    /// Work of the external loads (J).
-    pub external_work: f64,
-    /// Final position of each monitor.
-    pub monitors: BTreeMap<String, [f64; 3]>,
-    /// What the linear solver did (this session of the run).
-    pub linear: crate::solver::LinearStats,
-    /// What the scenario may not do as it says ([`warnings`]); absent when
-    /// there is nothing to warn about.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub warnings: Vec<String>,
 }
 
 /// A run that stopped early; everything up to the last converged step is on disk.
@@ -418,57 +352,6 @@ pub fn run_with(
         }
         Err(e) => Err(e),
     }
-}
-
-/// Records in `out/summary.json` that a run or a resume failed before its
-/// loop could (status `"failed"`, `message`): when `keep_previous` and the
-/// directory holds a summary, that summary keeps its counts (those of the
-/// session its history and checkpoint come from) and only its status and
-/// message change — but a `"completed"` one is left alone: the outputs
-/// beside it are still that run's; otherwise the summary of `setup`'s
-/// initial state (0 steps), or, without a setup, a summary of the status
-/// and the message alone.
-///
-/// # Errors
-/// The summary could not be written.
-pub fn record_failure(
-    out: &Path,
-    setup: Option<&Setup>,
-    keep_previous: bool,
-    message: &str,
-) -> std::io::Result<()> {
-    let path = out.join("summary.json");
-    let previous = keep_previous
-        .then(|| std::fs::read(&path).ok())
-        .flatten()
-        .and_then(|bytes| serde_json::from_slice::<serde_json::Value>(&bytes).ok())
-        .filter(serde_json::Value::is_object);
-    let json = match (previous, setup) {
-        (Some(value), _) if value["status"] == "completed" => return Ok(()),
-        (Some(mut value), _) => {
-            value["status"] = "failed".into();
-            value["message"] = message.into();
-            value
-        }
-        (None, Some(setup)) => {
-            let state = State::at_rest(&setup.model, setup.model.initial_positions());
-            let s = summary(
-                setup,
-                &state,
-                Some(message.to_owned()),
-                0,
-                0,
-                0,
-                Instant::now(),
-                0.0,
-                0.0,
-            );
-            serde_json::to_value(&s).unwrap_or_default()
-        }
-        (None, None) => serde_json::json!({ "status": "failed", "message": message }),
-    };
-    let text = serde_json::to_string_pretty(&json).unwrap_or_default();
-    write_atomic(&path, text.as_bytes())
 }
 
 /// [`run_with`] but for the summary of a failure before the loop;
@@ -909,82 +792,9 @@ fn contact_report(model: &Model, state: &State) -> Option<ContactReport> {
         .map(|(c, s)| c.report(&state.positions, state.time, s))
 }
 
-#[allow(clippy::too_many_arguments)]
-fn summary(
-    setup: &Setup,
-    state: &State,
-    failure: Option<String>,
-    steps: usize,
-    iterations: usize,
-    cutbacks: usize,
-    start: Instant,
-    kinetic: f64,
-    strain: f64,
-) -> Summary {
-    let model = &setup.model;
-    Summary {
-        status: if failure.is_some() {
-            "failed"
-        } else {
-            "completed"
-        }
-        .into(),
-        message: failure.unwrap_or_else(|| {
-            let noun = if steps == 1 { "step" } else { "steps" };
-            format!("completed {steps} {noun} to t = {:.6} s", state.time)
-        }),
-        at_rest: setup.rest.map(|_| false),
-        title: setup.title.clone(),
-        steps,
-        time: state.time,
-        first_contact_time: None,
-        newton_iterations: iterations,
-        cutbacks,
-        wall_seconds: start.elapsed().as_secs_f64(),
-        setup_seconds: 0.0,
-        output_seconds: 0.0,
-        output_thread_seconds: 0.0,
-        first_step_seconds: 0.0,
-        nodes: model.mesh().node_count(),
-        elements: model.mesh().element_count(),
-        dofs: model.dofs(),
-        fixed_dofs: model.fixed_count(),
-        kinetic_energy: kinetic,
-        strain_energy: strain,
-        external_work: state.external_work,
-        monitors: setup
-            .monitors
-            .iter()
-            .map(|m| {
-                let p = &state.positions[3 * m.node..3 * m.node + 3];
-                (m.name.clone(), [p[0], p[1], p[2]])
-            })
-            .collect(),
-        linear: Default::default(),
-        warnings: warnings(setup),
-    }
-}
-
-fn write_summary(out: &Path, summary: &Summary) -> Result<(), RunError> {
-    let path = out.join("summary.json");
-    let json = serde_json::to_string_pretty(summary).unwrap_or_default();
-    write_atomic(&path, json.as_bytes()).map_err(io_err(&path))
-}
-
 /// Writes a failed summary for a run that could not start, and returns the error.
 fn setup_failure(setup: &Setup, out: &Path, start: Instant, error: SetupError) -> RunError {
-    let state = State::at_rest(&setup.model, setup.model.initial_positions());
-    let summary = summary(
-        setup,
-        &state,
-        Some(error.to_string()),
-        0,
-        0,
-        0,
-        start,
-        0.0,
-        0.0,
-    );
+    let summary = initial_summary(setup, error.to_string(), start);
     match write_summary(out, &summary) {
         Ok(()) => RunError::Setup(error),
         Err(e) => e,
