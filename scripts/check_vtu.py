@@ -4,7 +4,7 @@
     python3 scripts/check_vtu.py OUTDIR
 
 Reads OUTDIR/fields.pvd, opens every VTU file it lists with meshio and checks
-the contract of SPEC section 4:
+the contract of the README's "Outputs":
 
 * at least one point, all coordinates finite;
 * exactly one cell block, of type triangle (order 1), triangle6 (order 2) or

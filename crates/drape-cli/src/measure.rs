@@ -1,5 +1,5 @@
 //! `drape measure DIR`: the shadow, drape coefficient and folds of a frame
-//! of a drape-tester run (SPEC §6.4, README "Measuring a drape").
+//! of a drape-tester run (README, "Measuring a drape").
 //!
 //! The frame is read with `drape-render`'s reader of output directories
 //! (the collection `fields.pvd`, the frame's `.vtu`); the initial mesh is

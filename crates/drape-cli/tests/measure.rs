@@ -1,4 +1,4 @@
-//! `drape measure` (SPEC §6.4, issue 22) on the outputs of real runs and of
+//! `drape measure` (README, "Measuring a drape"; issue 22) on the outputs of real runs and of
 //! a frame written by hand: the JSON object's keys and values, the frame
 //! chosen, and the bad inputs — no outputs, a step not written, no disc on
 //! a cylinder, a radius that cannot be — each refused with exit status 2

@@ -789,6 +789,8 @@ fn extra_plot_panels_follow_the_history() {
     fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Long, and kept whole: a catalogue of bad inputs, each a few lines
+/// that break one thing and check the error names the file.
 #[test]
 fn bad_inputs_give_errors_naming_the_file() {
     let dir = test_dir("bad");

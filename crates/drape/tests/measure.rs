@@ -1,4 +1,4 @@
-//! Measuring a drape (SPEC §6.4, issue 22): the shadow's area against
+//! Measuring a drape (README, "Measuring a drape"; issue 22): the shadow's area against
 //! closed forms and exact polygon areas, overlaps counted once, curved
 //! elements within their stated bound, folds of synthetic drapes with
 //! noise, and the drape tester found from scenarios (or why not).
@@ -132,7 +132,7 @@ fn exact_flat_area(mesh: &Mesh) -> f64 {
 }
 
 /// Step 0 of the drape tester (examples/drape-tester.toml): the flat disc
-/// of 15 rings measures DC = 1 within 0.5 % (SPEC §6.4 / issue 22). Of
+/// of 15 rings measures DC = 1 within 0.5 % (issue 22). Of
 /// order 1 its shadow is the inscribed 90-gon to rounding (DC = 1 − 0.13 %
 /// by the closed form); of orders 2 and 3 the rim's edge nodes are on the
 /// circle, the rim elements curved, and the shadow is within its bound of

@@ -707,7 +707,8 @@ fn bad_orthotropic_input_names_the_key_line_and_value() {
 /// for the homogeneous strain (200,000 directions, then golden section) —
 /// for both tension-field models — and that direction is 10 degrees and
 /// more away from the principal strain direction an isotropic model would
-/// take.
+/// take. (About 120 lines, kept whole: the reference computation and the
+/// checks of each model read as one derivation.)
 #[test]
 fn in_plane_shear_wrinkles_along_the_anisotropic_tension_field() {
     use std::f64::consts::PI;

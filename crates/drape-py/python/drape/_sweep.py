@@ -1,5 +1,5 @@
 """Parameter sweeps: one scenario run over a grid of parameter values
-(SPEC §6.5).
+(README, "Sweeps").
 
 A sweep file names a base scenario, a mode and the values of dotted keys::
 

@@ -43,7 +43,7 @@ use crate::par::Shared;
 use crate::solver::SparsePattern;
 use patch::{Patch, PatchError};
 
-/// The bending stiffness of the fabric (SPEC §6.2 `bending_rigidity`).
+/// The bending stiffness of the fabric (`[material] bending_rigidity`, docs/theory.md §1.10).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum BendingRigidity {
     /// The same rigidity `B` (N m) for every direction, without Poisson

@@ -1,4 +1,4 @@
-//! Measuring a drape the way a textile laboratory does (SPEC §6.4): the
+//! Measuring a drape the way a textile laboratory does (README, "Measuring a drape"): the
 //! shadow of a circular specimen draped over a circular pedestal, its
 //! drape coefficient and its number of folds.
 //!

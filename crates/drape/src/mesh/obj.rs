@@ -177,27 +177,48 @@ fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, Vec<&[u8]>)> {
 /// Checks the file and rewrites it for `tobj` as plain `v x y z [w]` and
 /// `f i j k ...` lines (absolute 1-based indices), dropping everything else.
 fn normalize(bytes: &[u8], file: &str, max_nodes: usize) -> Result<Vec<u8>, MeshReadError> {
-    let syntax = |line: usize, message: String| MeshReadError::Syntax {
-        file: file.to_owned(),
-        at: Some(Location::Line(line)),
-        message,
-    };
-    let parse_f64 = |tok: &[u8], what: &str, line: usize| {
-        std::str::from_utf8(tok)
-            .ok()
-            .and_then(|s| s.parse::<f64>().ok())
-            .ok_or_else(|| {
-                syntax(
-                    line,
-                    format!("expected {what} (a number), found '{}'", show(tok)),
-                )
-            })
-    };
-
     // A UTF-8 byte-order mark, which some editors write, is skipped.
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let mut out = Vec::with_capacity(bytes.len());
     // Pass 1: vertices (their positions kept for the polygons of pass 2).
+    let positions = write_vertices(bytes, file, max_nodes, &mut out)?;
+    // Pass 2: faces, with the vertex indices made absolute.
+    write_faces(bytes, file, &positions, &mut out)?;
+    Ok(out)
+}
+
+/// A syntax error at `line` of `file`.
+fn syntax(file: &str, line: usize, message: String) -> MeshReadError {
+    MeshReadError::Syntax {
+        file: file.to_owned(),
+        at: Some(Location::Line(line)),
+        message,
+    }
+}
+
+/// The number in `tok`, which is `what`, at `line` of `file`.
+fn parse_f64(tok: &[u8], what: &str, file: &str, line: usize) -> Result<f64, MeshReadError> {
+    std::str::from_utf8(tok)
+        .ok()
+        .and_then(|s| s.parse::<f64>().ok())
+        .ok_or_else(|| {
+            syntax(
+                file,
+                line,
+                format!("expected {what} (a number), found '{}'", show(tok)),
+            )
+        })
+}
+
+/// Writes the file's vertices as `v x y z [w]` lines into `out`, and
+/// returns their positions (divided by `w`), each checked finite; the
+/// first vertex past `max_nodes` is refused at its line.
+fn write_vertices(
+    bytes: &[u8],
+    file: &str,
+    max_nodes: usize,
+    out: &mut Vec<u8>,
+) -> Result<Vec<[f64; 3]>, MeshReadError> {
     let mut vertices: u64 = 0;
     let mut positions: Vec<[f64; 3]> = Vec::new();
     for (line, fields) in lines(bytes) {
@@ -219,6 +240,7 @@ fn normalize(bytes: &[u8], file: &str, max_nodes: usize) -> Result<Vec<u8>, Mesh
             [x, y, z, w] => ([*x, *y, *z], Some(*w)),
             _ => {
                 return Err(syntax(
+                    file,
                     line,
                     format!(
                         "expected 3 coordinates for vertex {vertices} (optionally followed by w \
@@ -230,12 +252,13 @@ fn normalize(bytes: &[u8], file: &str, max_nodes: usize) -> Result<Vec<u8>, Mesh
         };
         let mut x = [0f64; 3];
         for ((xk, tok), name) in x.iter_mut().zip(xyz).zip(["x", "y", "z"]) {
-            *xk = parse_f64(tok, &format!("coordinate {name}"), line)?;
+            *xk = parse_f64(tok, &format!("coordinate {name}"), file, line)?;
         }
         if let Some(w) = w {
-            let w = parse_f64(w, "the weight w", line)?;
+            let w = parse_f64(w, "the weight w", file, line)?;
             if w == 0.0 {
                 return Err(syntax(
+                    file,
                     line,
                     format!("vertex {vertices} has the weight w = 0"),
                 ));
@@ -260,8 +283,17 @@ fn normalize(bytes: &[u8], file: &str, max_nodes: usize) -> Result<Vec<u8>, Mesh
         }
         out.push(b'\n');
     }
+    Ok(positions)
+}
 
-    // Pass 2: faces, with the vertex indices made absolute.
+/// Writes the file's faces into `out` as `f i j k` triangles of absolute
+/// vertex indices into `positions` (a polygon cut into its ears).
+fn write_faces(
+    bytes: &[u8],
+    file: &str,
+    positions: &[[f64; 3]],
+    out: &mut Vec<u8>,
+) -> Result<(), MeshReadError> {
     let mut seen: u64 = 0;
     let mut faces: u64 = 0;
     for (line, fields) in lines(bytes) {
@@ -269,65 +301,20 @@ fn normalize(bytes: &[u8], file: &str, max_nodes: usize) -> Result<Vec<u8>, Mesh
             [b"v", ..] => seen += 1,
             [b"f", corners @ ..] => {
                 faces += 1;
-                if corners.len() < 3 {
-                    return Err(syntax(
+                let at = FaceAt {
+                    file,
+                    line,
+                    face: faces,
+                    seen,
+                    vertices: positions.len() as u64,
+                };
+                let face = at.indices(corners)?;
+                for triangle in triangles(&face, positions).map_err(|e| {
+                    syntax(
+                        file,
                         line,
-                        format!(
-                            "face {faces} has {} corner{}; a face needs at least 3",
-                            corners.len(),
-                            if corners.len() == 1 { "" } else { "s" }
-                        ),
-                    ));
-                }
-                let mut face: Vec<u64> = Vec::with_capacity(corners.len());
-                for corner in corners {
-                    let v = corner.split(|&b| b == b'/').next().unwrap_or(corner);
-                    let index = std::str::from_utf8(v)
-                        .ok()
-                        .and_then(|s| s.parse::<i64>().ok())
-                        .ok_or_else(|| {
-                            syntax(
-                                line,
-                                format!(
-                                    "expected a vertex index in face {faces}, found '{}'",
-                                    show(corner)
-                                ),
-                            )
-                        })?;
-                    let absolute = match index {
-                        0 => {
-                            return Err(syntax(
-                                line,
-                                format!("face {faces} uses vertex index 0; OBJ indices start at 1"),
-                            ));
-                        }
-                        i if i > 0 => i.unsigned_abs(),
-                        i => {
-                            let back = i.unsigned_abs();
-                            if back > seen {
-                                return Err(syntax(
-                                    line,
-                                    format!(
-                                        "face {faces} uses relative vertex index {i}, but only \
-                                         {seen} vertices precede it"
-                                    ),
-                                ));
-                            }
-                            seen - back + 1
-                        }
-                    };
-                    if absolute > vertices {
-                        return Err(MeshReadError::UnknownNode {
-                            file: file.to_owned(),
-                            at: Some(Location::Line(line)),
-                            element: faces,
-                            node_tag: absolute,
-                        });
-                    }
-                    face.push(absolute);
-                }
-                for triangle in triangles(&face, &positions).map_err(|e| {
-                    syntax(line, format!("face {faces} ({} corners): {e}", face.len()))
+                        format!("face {faces} ({} corners): {e}", face.len()),
+                    )
                 })? {
                     out.push(b'f');
                     for corner in triangle {
@@ -339,7 +326,93 @@ fn normalize(bytes: &[u8], file: &str, max_nodes: usize) -> Result<Vec<u8>, Mesh
             _ => {}
         }
     }
-    Ok(out)
+    Ok(())
+}
+
+/// Where a face is read: its file, line and number, after `seen` of the
+/// file's `vertices` vertices.
+struct FaceAt<'a> {
+    file: &'a str,
+    line: usize,
+    face: u64,
+    seen: u64,
+    vertices: u64,
+}
+
+impl FaceAt<'_> {
+    /// The absolute (1-based) vertex index of each of the face's
+    /// `corners` (`v`, `v/vt`, `v//vn` or `v/vt/vn`, absolute or relative);
+    /// at least three, each naming a vertex of the file.
+    fn indices(&self, corners: &[&[u8]]) -> Result<Vec<u64>, MeshReadError> {
+        let (file, line, faces) = (self.file, self.line, self.face);
+        if corners.len() < 3 {
+            return Err(syntax(
+                file,
+                line,
+                format!(
+                    "face {faces} has {} corner{}; a face needs at least 3",
+                    corners.len(),
+                    if corners.len() == 1 { "" } else { "s" }
+                ),
+            ));
+        }
+        let mut face: Vec<u64> = Vec::with_capacity(corners.len());
+        for corner in corners {
+            let v = corner.split(|&b| b == b'/').next().unwrap_or(corner);
+            let index = std::str::from_utf8(v)
+                .ok()
+                .and_then(|s| s.parse::<i64>().ok())
+                .ok_or_else(|| {
+                    syntax(
+                        file,
+                        line,
+                        format!(
+                            "expected a vertex index in face {faces}, found '{}'",
+                            show(corner)
+                        ),
+                    )
+                })?;
+            let absolute = self.absolute(index)?;
+            if absolute > self.vertices {
+                return Err(MeshReadError::UnknownNode {
+                    file: file.to_owned(),
+                    at: Some(Location::Line(line)),
+                    element: faces,
+                    node_tag: absolute,
+                });
+            }
+            face.push(absolute);
+        }
+        Ok(face)
+    }
+
+    /// The 1-based index of vertex `index`: itself when positive, counted
+    /// back from the last vertex seen when negative; 0 is refused.
+    fn absolute(&self, index: i64) -> Result<u64, MeshReadError> {
+        let (file, line, faces, seen) = (self.file, self.line, self.face, self.seen);
+        match index {
+            0 => Err(syntax(
+                file,
+                line,
+                format!("face {faces} uses vertex index 0; OBJ indices start at 1"),
+            )),
+            i if i > 0 => Ok(i.unsigned_abs()),
+            i => {
+                let back = i.unsigned_abs();
+                if back > seen {
+                    return Err(syntax(
+                        file,
+                        line,
+                        format!(
+                            "face {faces} uses relative vertex index {i}, but only \
+                             {seen} vertices precede it"
+                        ),
+                    ));
+                }
+                Ok(seen - back + 1)
+            }
+        }
+    }
 }
 
 /// The triangles of the face `face` (1-based vertex indices into
@@ -385,21 +458,6 @@ mod tests {
 
     fn parse(text: &str) -> Result<Mesh, MeshReadError> {
         parse_obj(text.as_bytes(), "test.obj")
-    }
-
-    /// The cap on nodes, given small: a file of up to that many vertices
-    /// is read, the first vertex past it is refused at its line.
-    #[test]
-    fn a_vertex_past_the_cap_is_refused_at_its_line() {
-        let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\n# more\nv 0 1 0\nf 1 2 3 4\n";
-        let m = parse_obj_at_most(text.as_bytes(), "cap.obj", 4).unwrap();
-        assert_eq!(m.node_count(), 4);
-        let err = parse_obj_at_most(text.as_bytes(), "cap.obj", 3).unwrap_err();
-        assert_eq!(
-            err.to_string(),
-            "cap.obj, line 5: vertex 4, more than the 3 nodes a mesh may have; use a coarser mesh"
-        );
-        assert_eq!(err.location(), Some(Location::Line(5)));
     }
 
     #[test]
@@ -613,5 +671,20 @@ mod tests {
         assert!(matches!(err, MeshReadError::Io { .. }));
         assert_eq!(err.file(), missing.display().to_string());
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The cap on nodes, given small: a file of up to that many vertices
+    /// is read, the first vertex past it is refused at its line.
+    #[test]
+    fn a_vertex_past_the_cap_is_refused_at_its_line() {
+        let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\n# more\nv 0 1 0\nf 1 2 3 4\n";
+        let m = parse_obj_at_most(text.as_bytes(), "cap.obj", 4).unwrap();
+        assert_eq!(m.node_count(), 4);
+        let err = parse_obj_at_most(text.as_bytes(), "cap.obj", 3).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "cap.obj, line 5: vertex 4, more than the 3 nodes a mesh may have; use a coarser mesh"
+        );
+        assert_eq!(err.location(), Some(Location::Line(5)));
     }
 }

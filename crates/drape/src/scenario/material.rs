@@ -152,7 +152,7 @@ fn warp_direction(c: &Checker, m: &MaterialSpec) -> Result<[f64; 3], ScenarioErr
     }
 }
 
-/// `[material] bending_rigidity` and `warp_direction` (SPEC §6.2): `None`
+/// `[material] bending_rigidity` and `warp_direction` (README, "Scenario reference", `[material]`): `None`
 /// for no bending (the default, or a rigidity of 0).
 pub(super) fn build_bending(
     c: &Checker,

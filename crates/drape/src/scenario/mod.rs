@@ -18,6 +18,7 @@
 //! line. `build` checks the values section by section (with `check`;
 //! `locate` finds their lines).
 
+mod analysis;
 mod build;
 mod check;
 mod contact;
@@ -166,7 +167,7 @@ pub enum MeshShape {
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
     /// `"saint-venant-kirchhoff"` (isotropic, the default) or
-    /// `"orthotropic"` (a woven fabric, SPEC §6.2).
+    /// `"orthotropic"` (a woven fabric, docs/theory.md §1.11).
     #[serde(default)]
     pub model: MaterialModel,
     /// Young's modulus `E` (Pa), > 0, <= 1e15. Required by the isotropic model, not
@@ -200,7 +201,7 @@ pub struct MaterialSpec {
     /// with `"relaxed-energy"`.
     #[serde(default)]
     pub prestress: f64,
-    /// Bending rigidity (SPEC §6.2): a number `B` (N m, >= 0), a table
+    /// Bending rigidity (docs/theory.md §1.10): a number `B` (N m, >= 0), a table
     /// `{ warp, weft }` (N m each) or `"plate"`; default 0, a pure
     /// membrane. Read by hand for messages naming the inner key.
     #[serde(default)]

@@ -427,7 +427,6 @@ impl Checkpoint {
     fn check_values(&self) -> Result<(), CheckpointError> {
         let c = &self.counters;
         let s = &self.state;
-        let refuse = |ok: bool, message: String| if ok { Ok(()) } else { Err(invalid(message)) };
         refuse(
             c.step_size.is_finite() && c.step_size >= 0.0,
             format!("step size {} is not a finite size >= 0", c.step_size),
@@ -539,7 +538,6 @@ impl Checkpoint {
     fn fits(&self, setup: &Setup) -> Result<(), CheckpointError> {
         let c = &self.counters;
         let time = self.state.time;
-        let refuse = |ok: bool, message: String| if ok { Ok(()) } else { Err(invalid(message)) };
         let segments: Vec<(usize, f64)> = match &setup.analysis {
             Analysis::Dynamic { segments, .. } => segments.clone(),
             Analysis::Static { steps } => vec![(*steps, 1.0 / *steps as f64)],
@@ -556,79 +554,9 @@ impl Checkpoint {
         let adaptive =
             setup.adaptive.is_some() && matches!(setup.analysis, Analysis::Dynamic { .. });
         if adaptive {
-            refuse(
-                c.scheduled_done == 0,
-                format!(
-                    "scheduled steps done {} with adaptive steps (always 0)",
-                    c.scheduled_done
-                ),
-            )?;
-            // A segment's steps are at least half its floor, dt / 2^halvings,
-            // but its last one; twice that many with a margin.
-            let most: f64 = segments
-                .iter()
-                .map(|(n, _)| 4.0 * *n as f64 * 2f64.powi(halvings as i32) + 2.0)
-                .sum();
-            refuse(
-                (c.step as f64) <= most,
-                format!(
-                    "converged steps {} more than the schedule's adaptive steps allow ({most:.0})",
-                    c.step
-                ),
-            )?;
-            // The segment's own check is the step controller's; here its
-            // span of time.
-            let mut start = 0.0;
-            for (k, (n, dt)) in segments.iter().enumerate() {
-                let end = start + *n as f64 * dt;
-                if k == c.segment {
-                    refuse(
-                        time >= start - slack && time <= end + slack,
-                        format!("time {time} outside segment {k}'s [{start}, {end}] s"),
-                    )?;
-                }
-                start = end;
-            }
+            self.fits_adaptive(&segments, slack, halvings)?;
         } else {
-            let total: usize = segments.iter().map(|(n, _)| n).sum();
-            refuse(
-                c.scheduled_done <= total,
-                format!(
-                    "scheduled steps done {} beyond the schedule's {total}",
-                    c.scheduled_done
-                ),
-            )?;
-            let per_step = 1usize.checked_shl(halvings as u32).unwrap_or(usize::MAX);
-            refuse(
-                c.step >= c.scheduled_done && c.step <= c.scheduled_done.saturating_mul(per_step),
-                format!(
-                    "converged steps {} do not fit {} scheduled steps done (each 1 to 2^{halvings} steps)",
-                    c.step, c.scheduled_done
-                ),
-            )?;
-            refuse(
-                c.segment == 0,
-                format!("segment {} with fixed steps (always 0)", c.segment),
-            )?;
-            refuse(
-                c.step_size == 0.0,
-                format!("step size {} with fixed steps (always 0)", c.step_size),
-            )?;
-            // The time the scheduled steps done reach.
-            let mut left = c.scheduled_done;
-            let mut reached = 0.0;
-            for (n, dt) in &segments {
-                let k = left.min(*n);
-                reached += k as f64 * dt;
-                left -= k;
-            }
-            refuse(
-                (time - reached).abs() <= 1e-6 * end_time,
-                format!(
-                    "time {time} is not where {} scheduled steps end ({reached})",
-                    c.scheduled_done
-                ),
-            )?;
+            self.fits_fixed(&segments, end_time, halvings)?;
         }
         if setup.rest.is_none() {
             refuse(
@@ -658,6 +586,112 @@ impl Checkpoint {
             ),
         )
     }
+
+    /// [`Checkpoint::fits`] with adaptive steps over `segments`: no
+    /// scheduled steps, at most the steps the segments allow with
+    /// `halvings` halvings, the time within the checkpoint's segment
+    /// (to `slack`).
+    fn fits_adaptive(
+        &self,
+        segments: &[(usize, f64)],
+        slack: f64,
+        halvings: usize,
+    ) -> Result<(), CheckpointError> {
+        let c = &self.counters;
+        let time = self.state.time;
+        refuse(
+            c.scheduled_done == 0,
+            format!(
+                "scheduled steps done {} with adaptive steps (always 0)",
+                c.scheduled_done
+            ),
+        )?;
+        // A segment's steps are at least half its floor, dt / 2^halvings,
+        // but its last one; twice that many with a margin.
+        let most: f64 = segments
+            .iter()
+            .map(|(n, _)| 4.0 * *n as f64 * 2f64.powi(halvings as i32) + 2.0)
+            .sum();
+        refuse(
+            (c.step as f64) <= most,
+            format!(
+                "converged steps {} more than the schedule's adaptive steps allow ({most:.0})",
+                c.step
+            ),
+        )?;
+        // The segment's own check is the step controller's; here its
+        // span of time.
+        let mut start = 0.0;
+        for (k, (n, dt)) in segments.iter().enumerate() {
+            let end = start + *n as f64 * dt;
+            if k == c.segment {
+                refuse(
+                    time >= start - slack && time <= end + slack,
+                    format!("time {time} outside segment {k}'s [{start}, {end}] s"),
+                )?;
+            }
+            start = end;
+        }
+        Ok(())
+    }
+
+    /// [`Checkpoint::fits`] with the segments' fixed steps: the scheduled
+    /// steps done within the schedule, each split into 1 to `2^halvings`
+    /// steps, no controller state, and the time where those scheduled
+    /// steps end (to `1e-6` of `end_time`).
+    fn fits_fixed(
+        &self,
+        segments: &[(usize, f64)],
+        end_time: f64,
+        halvings: usize,
+    ) -> Result<(), CheckpointError> {
+        let c = &self.counters;
+        let time = self.state.time;
+        let total: usize = segments.iter().map(|(n, _)| n).sum();
+        refuse(
+            c.scheduled_done <= total,
+            format!(
+                "scheduled steps done {} beyond the schedule's {total}",
+                c.scheduled_done
+            ),
+        )?;
+        let per_step = 1usize.checked_shl(halvings as u32).unwrap_or(usize::MAX);
+        refuse(
+            c.step >= c.scheduled_done && c.step <= c.scheduled_done.saturating_mul(per_step),
+            format!(
+                "converged steps {} do not fit {} scheduled steps done (each 1 to 2^{halvings} steps)",
+                c.step, c.scheduled_done
+            ),
+        )?;
+        refuse(
+            c.segment == 0,
+            format!("segment {} with fixed steps (always 0)", c.segment),
+        )?;
+        refuse(
+            c.step_size == 0.0,
+            format!("step size {} with fixed steps (always 0)", c.step_size),
+        )?;
+        // The time the scheduled steps done reach.
+        let mut left = c.scheduled_done;
+        let mut reached = 0.0;
+        for (n, dt) in segments {
+            let k = left.min(*n);
+            reached += k as f64 * dt;
+            left -= k;
+        }
+        refuse(
+            (time - reached).abs() <= 1e-6 * end_time,
+            format!(
+                "time {time} is not where {} scheduled steps end ({reached})",
+                c.scheduled_done
+            ),
+        )
+    }
+}
+
+/// `Ok` when `ok`, else the checkpoint is unusable for `message`.
+fn refuse(ok: bool, message: String) -> Result<(), CheckpointError> {
+    if ok { Ok(()) } else { Err(invalid(message)) }
 }
 
 /// Checks the magic, the checksum and the version: the reader after the

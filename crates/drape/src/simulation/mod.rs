@@ -30,6 +30,7 @@ mod checkpoint;
 mod frames;
 pub mod schedule;
 mod start;
+mod summary;
 mod warnings;
 use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
 use crate::integrator::{State, StaticStepper};
@@ -41,12 +42,12 @@ use crate::solver::NewtonError;
 pub use checkpoint::{Checkpoint, CheckpointError, Counters};
 use frames::Snapshot;
 use schedule::{RestWatch, StepController, fastest_node};
-use serde::Serialize;
 use start::Start;
 pub use start::{ResumeError, SetupError, check_resume_inputs};
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+use summary::{Figures, initial_summary, summary, write_summary};
+pub use summary::{Summary, record_failure, record_refused_resume};
 pub use warnings::{MAX_MOTION_PER_STEP, warnings};
 
 /// The stretch below which Saint-Venant–Kirchhoff loses stability in
@@ -81,78 +82,6 @@ pub struct StepInfo {
     pub strain_energy: f64,
     /// Work of the external loads since the start (J).
     pub external_work: f64,
-}
-
-/// `summary.json`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Summary {
-    /// `"completed"`, `"failed"` or `"interrupted"`.
-    pub status: String,
-    /// Human-readable outcome; it says "at rest" when the rest criterion
-    /// ended the run.
-    pub message: String,
-    /// Whether the rest criterion ended the run; absent without a rest
-    /// criterion (`[time] rest`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub at_rest: Option<bool>,
-    /// Scenario title.
-    pub title: String,
-    /// Converged steps.
-    pub steps: usize,
-    /// Final simulated time (s), or load factor in statics.
-    pub time: f64,
-    /// Time of the first step that ended with an active contact, or null.
-    pub first_contact_time: Option<f64>,
-    /// Total Newton iterations.
-    pub newton_iterations: usize,
-    /// Steps that had to be cut back.
-    pub cutbacks: usize,
-    /// Wall-clock time of the run (s).
-    pub wall_seconds: f64,
-    /// Of which: set-up before the first step (s) — linear-solver
-    /// structures, the initial acceleration, the initial outputs (of this
-    /// session, for a resumed run). `wall_seconds - setup_seconds` is the
-    /// time of the steps.
-    pub setup_seconds: f64,
-    /// Of which: the run loop's output work after the set-up (s) — writing
-    /// the history rows, handing the field frames to the thread that
-    /// writes them, and waiting for that thread (when it falls behind,
-    /// before a checkpoint and at the end).
-    /// `wall_seconds - setup_seconds - output_seconds` is the time of the
-    /// mechanics and the solvers.
-    pub output_seconds: f64,
-    /// The time the thread writing the field frames spent on them (s):
-    /// element results, encoding, writing and syncing the VTU files and the
-    /// collection, the initial frame's included. It runs alongside the
-    /// steps and is not part of `wall_seconds`' breakdown; only the part
-    /// the loop waits for shows in `output_seconds`.
-    pub output_thread_seconds: f64,
-    /// Of which: the first step of this session (s), without its outputs;
-    /// it also builds what the linear solver keeps across steps (symbolic
-    /// factorisations, the multigrid hierarchy).
-    pub first_step_seconds: f64,
-    /// Nodes of the mesh.
-    pub nodes: usize,
-    /// Elements of the mesh.
-    pub elements: usize,
-    /// Degrees of freedom (3 per node).
-    pub dofs: usize,
-    /// Fixed components.
-    pub fixed_dofs: usize,
-    /// Final kinetic energy (J).
-    pub kinetic_energy: f64,
-    /// Final strain energy (J).
-    pub strain_energy: f64,
-    /// Work of the external loads (J).
-    pub external_work: f64,
-    /// Final position of each monitor.
-    pub monitors: BTreeMap<String, [f64; 3]>,
-    /// What the linear solver did (this session of the run).
-    pub linear: crate::solver::LinearStats,
-    /// What the scenario may not do as it says ([`warnings`]); absent when
-    /// there is nothing to warn about.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub warnings: Vec<String>,
 }
 
 /// A run that stopped early; everything up to the last converged step is on disk.
@@ -277,41 +206,6 @@ struct History<'a> {
     /// reports, so that it describes the history on disk even when the
     /// next row could not be written.
     last: Option<Figures>,
-}
-
-/// The figures of a state that a history row and the summary report.
-#[derive(Debug, Clone, Default)]
-struct Figures {
-    /// Time (s), or load factor in statics.
-    time: f64,
-    kinetic: f64,
-    strain: f64,
-    external_work: f64,
-    /// Each monitor's position, in the scenario's order.
-    monitors: Vec<[f64; 3]>,
-}
-
-impl Figures {
-    /// Sets the figures of `state`, whose kinetic and strain energies are
-    /// `kinetic` and `strain`.
-    fn set(&mut self, setup: &Setup, state: &State, kinetic: f64, strain: f64) {
-        self.time = state.time;
-        self.kinetic = kinetic;
-        self.strain = strain;
-        self.external_work = state.external_work;
-        self.monitors.clear();
-        self.monitors.extend(setup.monitors.iter().map(|m| {
-            let p = &state.positions[3 * m.node..3 * m.node + 3];
-            [p[0], p[1], p[2]]
-        }));
-    }
-
-    /// The figures of `state` (see [`Figures::set`]).
-    fn of(setup: &Setup, state: &State, kinetic: f64, strain: f64) -> Self {
-        let mut figures = Self::default();
-        figures.set(setup, state, kinetic, strain);
-        figures
-    }
 }
 
 /// The history's column names, in order.
@@ -460,70 +354,6 @@ pub fn run_with(
         }
         Err(e) => Err(e),
     }
-}
-
-/// Records in `out/summary.json` that a run or a resume failed before its
-/// loop could (status `"failed"`, `message`): when `keep_previous` and the
-/// directory holds a summary, that summary keeps its counts (those of the
-/// session its history and checkpoint come from) and only its status and
-/// message change — but a `"completed"` one is left alone: the outputs
-/// beside it are still that run's; otherwise the summary of `setup`'s
-/// initial state (0 steps), or, without a setup, a summary of the status
-/// and the message alone.
-///
-/// # Errors
-/// The summary could not be written.
-pub fn record_failure(
-    out: &Path,
-    setup: Option<&Setup>,
-    keep_previous: bool,
-    message: &str,
-) -> std::io::Result<()> {
-    let path = out.join("summary.json");
-    let previous = keep_previous
-        .then(|| std::fs::read(&path).ok())
-        .flatten()
-        .and_then(|bytes| serde_json::from_slice::<serde_json::Value>(&bytes).ok())
-        .filter(serde_json::Value::is_object);
-    let json = match (previous, setup) {
-        (Some(value), _) if value["status"] == "completed" => return Ok(()),
-        (Some(mut value), _) => {
-            value["status"] = "failed".into();
-            value["message"] = message.into();
-            value
-        }
-        (None, Some(setup)) => {
-            let s = summary(
-                setup,
-                &initial_figures(setup),
-                Some(message.to_owned()),
-                0,
-                0,
-                0,
-                Instant::now(),
-            );
-            serde_json::to_value(&s).unwrap_or_default()
-        }
-        (None, None) => serde_json::json!({ "status": "failed", "message": message }),
-    };
-    let text = serde_json::to_string_pretty(&json).unwrap_or_default();
-    write_atomic(&path, text.as_bytes())
-}
-
-/// Records in `out/summary.json` that a resume was refused — after it took
-/// the directory's lock, before its loop — for `why` (a changed or
-/// missing input file, a checkpoint it cannot use, a scenario that no
-/// longer reads): status `"failed"`, message `"cannot resume: {why}"`, the
-/// counts of the session the history and checkpoint come from kept (see
-/// [`record_failure`]; a `"completed"` run's summary is left alone).
-/// Returns the message. The command line and the Python package record
-/// their refusals with it, so that they say the same.
-///
-/// # Errors
-/// The summary could not be written.
-pub fn record_refused_resume(out: &Path, why: &dyn std::fmt::Display) -> std::io::Result<String> {
-    let message = format!("cannot resume: {why}");
-    record_failure(out, None, true, &message).map(|()| message)
 }
 
 /// [`run_with`] but for the summary of a failure before the loop;
@@ -973,81 +803,9 @@ fn contact_report(model: &Model, state: &State) -> Option<ContactReport> {
         .map(|(c, s)| c.report(&state.positions, state.time, s))
 }
 
-/// The summary of a run after `steps` steps whose last state has
-/// `figures`; failed when there is a `failure` message.
-fn summary(
-    setup: &Setup,
-    figures: &Figures,
-    failure: Option<String>,
-    steps: usize,
-    iterations: usize,
-    cutbacks: usize,
-    start: Instant,
-) -> Summary {
-    let model = &setup.model;
-    Summary {
-        status: if failure.is_some() {
-            "failed"
-        } else {
-            "completed"
-        }
-        .into(),
-        message: failure.unwrap_or_else(|| {
-            let noun = if steps == 1 { "step" } else { "steps" };
-            format!("completed {steps} {noun} to t = {:.6} s", figures.time)
-        }),
-        at_rest: setup.rest.map(|_| false),
-        title: setup.title.clone(),
-        steps,
-        time: figures.time,
-        first_contact_time: None,
-        newton_iterations: iterations,
-        cutbacks,
-        wall_seconds: start.elapsed().as_secs_f64(),
-        setup_seconds: 0.0,
-        output_seconds: 0.0,
-        output_thread_seconds: 0.0,
-        first_step_seconds: 0.0,
-        nodes: model.mesh().node_count(),
-        elements: model.mesh().element_count(),
-        dofs: model.dofs(),
-        fixed_dofs: model.fixed_count(),
-        kinetic_energy: figures.kinetic,
-        strain_energy: figures.strain,
-        external_work: figures.external_work,
-        monitors: (setup.monitors.iter())
-            .zip(&figures.monitors)
-            .map(|(m, p)| (m.name.clone(), *p))
-            .collect(),
-        linear: Default::default(),
-        warnings: warnings(setup),
-    }
-}
-
-/// The figures of the initial state, at rest and unstrained: the
-/// summary of a run that could not start.
-fn initial_figures(setup: &Setup) -> Figures {
-    let state = State::at_rest(&setup.model, setup.model.initial_positions());
-    Figures::of(setup, &state, 0.0, 0.0)
-}
-
-fn write_summary(out: &Path, summary: &Summary) -> Result<(), RunError> {
-    let path = out.join("summary.json");
-    let json = serde_json::to_string_pretty(summary).unwrap_or_default();
-    write_atomic(&path, json.as_bytes()).map_err(io_err(&path))
-}
-
 /// Writes a failed summary for a run that could not start, and returns the error.
 fn setup_failure(setup: &Setup, out: &Path, start: Instant, error: SetupError) -> RunError {
-    let summary = summary(
-        setup,
-        &initial_figures(setup),
-        Some(error.to_string()),
-        0,
-        0,
-        0,
-        start,
-    );
+    let summary = initial_summary(setup, error.to_string(), start);
     match write_summary(out, &summary) {
         Ok(()) => RunError::Setup(error),
         Err(e) => e,

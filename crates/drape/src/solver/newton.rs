@@ -4,7 +4,7 @@
 //! has converged when both
 //!
 //! * `|dY| / L <= tolerance`, with `L` the Euclidean norm of the initial
-//!   positions measured from their centroid: the spec's `|X|`, made
+//!   positions measured from their centroid (docs/theory.md §1.7), made
 //!   independent of where the origin lies and never zero for a mesh of
 //!   more than one node (the safeguard for `|X|` near zero); and
 //! * `|G| <= residual_tolerance * scale`, with `scale` the sum of the norms

@@ -44,6 +44,9 @@ impl Kind {
 
 /// Number of nodes and kind of a Gmsh element type (from Gmsh's
 /// `GmshDefines.h`); `None` for types of no fixed size or unknown.
+///
+/// Long because it is a table, one arm per type in Gmsh's list, read
+/// against that list: kept whole.
 pub(super) fn element_type(t: u64) -> Option<(usize, Kind)> {
     use Kind::*;
     let r = match t {
