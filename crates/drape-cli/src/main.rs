@@ -79,52 +79,7 @@ enum Command {
     /// Filled triangles coloured by a field (default: vertical displacement),
     /// depth-tested, anti-aliased, with a colour bar; the obstacles of
     /// DIR/scenario.toml in grey.
-    Render {
-        /// The output directory of a run (or its fields.pvd).
-        dir: PathBuf,
-        /// The frame of this step [default: the last].
-        #[arg(long, conflicts_with = "time")]
-        step: Option<u64>,
-        /// The frame nearest this time (s).
-        #[arg(long, allow_negative_numbers = true)]
-        time: Option<f64>,
-        /// Camera: top, side or perspective.
-        #[arg(long, default_value = "perspective", value_parser = ["top", "side", "perspective"])]
-        view: String,
-        /// displacement_z, displacement, velocity, contact_force,
-        /// principal_stress_max, principal_stress_min or wrinkle_state.
-        #[arg(long, default_value = "displacement_z")]
-        field: String,
-        /// A panel of frames from the first to the last, one colour scale.
-        #[arg(long, conflicts_with_all = ["animate", "step", "time"])]
-        grid: bool,
-        /// Panels of --grid.
-        #[arg(long, default_value_t = 6)]
-        panels: usize,
-        /// Every written frame into a GIF.
-        #[arg(long)]
-        animate: bool,
-        /// Delay between animation frames (ms).
-        #[arg(long, default_value_t = 100)]
-        delay_ms: u32,
-        /// Output file [default: DIR/render.png, DIR/render-grid.png or DIR/animation.gif].
-        #[arg(short = 'o', long)]
-        output: Option<PathBuf>,
-        /// Draw the obstacles of this scenario [default: DIR/scenario.toml].
-        #[arg(long)]
-        scenario: Option<PathBuf>,
-        /// Do not draw obstacles.
-        #[arg(long)]
-        no_obstacles: bool,
-        /// Image size WxH [default: 1200x900; 800x600 with --animate]; 160 to
-        /// 10000 by 120 to 10000, and at most 2 GiB of pixel buffers (3x
-        /// supersampled: about 5000x5000).
-        #[arg(long)]
-        size: Option<String>,
-        /// Colour scale limits instead of the field's range.
-        #[arg(long, num_args = 2, value_names = ["MIN", "MAX"], allow_negative_numbers = true)]
-        range: Option<Vec<f64>>,
-    },
+    Render(RenderArgs),
     /// Plot the history of an output directory: monitors' z, energies,
     /// Newton iterations, contact force, wrinkling states, smallest gap.
     Plot {
@@ -212,37 +167,7 @@ fn main() -> ExitCode {
             verbose,
         } => run(scenario, out, resume, quiet, verbose),
         Command::Check { scenario } => check(&scenario),
-        Command::Render {
-            dir,
-            step,
-            time,
-            view,
-            field,
-            grid,
-            panels,
-            animate,
-            delay_ms,
-            output,
-            scenario,
-            no_obstacles,
-            size,
-            range,
-        } => render(RenderArgs {
-            dir,
-            step,
-            time,
-            view,
-            field,
-            grid,
-            panels,
-            animate,
-            delay_ms,
-            output,
-            scenario,
-            no_obstacles,
-            size,
-            range,
-        }),
+        Command::Render(args) => render(args),
         Command::Plot { dir, output, size } => plot(&dir, output, size.as_deref()),
         Command::Measure {
             dir,
@@ -667,20 +592,52 @@ fn started_with(dir: &Path) -> Result<PathBuf, Failure> {
     Ok(path_from_bytes(bytes))
 }
 
+// `drape render`'s arguments (the subcommand's and the function's).
+#[derive(clap::Args)]
 struct RenderArgs {
+    /// The output directory of a run (or its fields.pvd).
     dir: PathBuf,
+    /// The frame of this step [default: the last].
+    #[arg(long, conflicts_with = "time")]
     step: Option<u64>,
+    /// The frame nearest this time (s).
+    #[arg(long, allow_negative_numbers = true)]
     time: Option<f64>,
+    /// Camera: top, side or perspective.
+    #[arg(long, default_value = "perspective", value_parser = ["top", "side", "perspective"])]
     view: String,
+    /// displacement_z, displacement, velocity, contact_force,
+    /// principal_stress_max, principal_stress_min or wrinkle_state.
+    #[arg(long, default_value = "displacement_z")]
     field: String,
+    /// A panel of frames from the first to the last, one colour scale.
+    #[arg(long, conflicts_with_all = ["animate", "step", "time"])]
     grid: bool,
+    /// Panels of --grid.
+    #[arg(long, default_value_t = 6)]
     panels: usize,
+    /// Every written frame into a GIF.
+    #[arg(long)]
     animate: bool,
+    /// Delay between animation frames (ms).
+    #[arg(long, default_value_t = 100)]
     delay_ms: u32,
+    /// Output file [default: DIR/render.png, DIR/render-grid.png or DIR/animation.gif].
+    #[arg(short = 'o', long)]
     output: Option<PathBuf>,
+    /// Draw the obstacles of this scenario [default: DIR/scenario.toml].
+    #[arg(long)]
     scenario: Option<PathBuf>,
+    /// Do not draw obstacles.
+    #[arg(long)]
     no_obstacles: bool,
+    /// Image size WxH [default: 1200x900; 800x600 with --animate]; 160 to
+    /// 10000 by 120 to 10000, and at most 2 GiB of pixel buffers (3x
+    /// supersampled: about 5000x5000).
+    #[arg(long)]
     size: Option<String>,
+    /// Colour scale limits instead of the field's range.
+    #[arg(long, num_args = 2, value_names = ["MIN", "MAX"], allow_negative_numbers = true)]
     range: Option<Vec<f64>>,
 }
 

@@ -7,10 +7,10 @@
 //! output directory, the same stop flag and the same checkpoints — and
 //! hands the outputs to Python through the readers of `drape-render`.
 //!
-//! * [`run::run`], [`run::check`]: `drape.run`, `drape.check`.
-//! * [`result::RunResult`]: summary, history, positions of a frame.
-//! * [`input`]: a scenario given as a path or as a dict.
-//! * [`errors`]: the library's errors as the package's exceptions.
+//! * `run::run`, `run::check`: `drape.run`, `drape.check`.
+//! * `result::RunResult`: summary, history, positions of a frame.
+//! * `input`: a scenario given as a path or as a dict.
+//! * `errors`: the library's errors as the package's exceptions.
 
 mod errors;
 mod input;

@@ -206,9 +206,31 @@ fn step_potential<'a>(
 /// converged active set, multipliers and refreshed features; on error it is
 /// unchanged. Returns Newton's report (iterations summed over re-solutions)
 /// and the strain energy; `f_ext` holds the external forces at the
-/// solution.
+/// solution, or `old_ext` (the step's start's) again after an error, so
+/// that a step cut back starts from them.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_step(
+    model: &Model,
+    terms: StepTerms,
+    contact: &mut Option<ContactState>,
+    y: &mut [f64],
+    length: f64,
+    settings: &NewtonSettings,
+    ws: &mut NewtonWorkspace,
+    f_ext: &mut [f64],
+    old_ext: &[f64],
+    my: &mut [f64],
+) -> Result<(NewtonReport, f64), NewtonError> {
+    let result = solve_step_from(model, terms, contact, y, length, settings, ws, f_ext, my);
+    if result.is_err() {
+        f_ext.copy_from_slice(old_ext);
+    }
+    result
+}
+
+/// [`solve_step`] but for the restoring of `f_ext` after an error.
+#[allow(clippy::too_many_arguments)]
+fn solve_step_from(
     model: &Model,
     terms: StepTerms,
     contact: &mut Option<ContactState>,

@@ -169,7 +169,7 @@ impl Newmark {
             pressure: model.pressure_at(t1, None),
             time: t1,
         };
-        let result = solve_step(
+        let (report, strain_energy) = solve_step(
             model,
             terms,
             &mut state.contact,
@@ -178,15 +178,9 @@ impl Newmark {
             settings,
             &mut ws.newton,
             &mut ws.f_ext,
+            &ws.old_ext,
             &mut ws.my,
-        );
-        let (report, strain_energy) = match result {
-            Ok(r) => r,
-            Err(e) => {
-                ws.f_ext.copy_from_slice(&ws.old_ext);
-                return Err(e);
-            }
-        };
+        )?;
         let (y, old_ext) = (&ws.y, &ws.old_ext);
         let mut work = 0.0;
         for i in 0..y.len() {

@@ -45,7 +45,7 @@ impl StaticStepper {
             pressure: model.pressure_at(lambda, Some(lambda)),
             time: lambda,
         };
-        let result = solve_step(
+        let (report, strain_energy) = solve_step(
             model,
             terms,
             &mut state.contact,
@@ -54,15 +54,9 @@ impl StaticStepper {
             settings,
             &mut ws.newton,
             &mut ws.f_ext,
+            &ws.old_ext,
             &mut ws.my,
-        );
-        let (report, strain_energy) = match result {
-            Ok(r) => r,
-            Err(e) => {
-                ws.f_ext.copy_from_slice(&ws.old_ext);
-                return Err(e);
-            }
-        };
+        )?;
         let mut work = 0.0;
         for i in 0..ws.y.len() {
             work += 0.5 * (ws.old_ext[i] + ws.f_ext[i]) * (ws.y[i] - state.positions[i]);
