@@ -28,11 +28,12 @@
 //!    the wrinkling tangent) solved by GMRES preconditioned by the
 //!    Cholesky factor of its symmetric part. The factor is kept for the
 //!    reuse path and for Newton's chord steps.
-//! 5. **LU** with partial pivoting and a COLAMD ordering: what nothing
-//!    above solved (a Hessian that is not positive definite, such as a
-//!    membrane in compression in statics) — up to 300,000 unknowns, above
-//!    which its fill would take tens of gigabytes and the solve fails
-//!    instead.
+//! 5. **Block LU again**, above its size limit, for what Cholesky
+//!    refused (a Hessian that is not positive definite: a fabric folding,
+//!    a membrane in compression in statics); then **LU** with partial
+//!    pivoting and a COLAMD ordering, for what nothing above solved — both
+//!    up to 300,000 unknowns, above which their fill would take tens of
+//!    gigabytes and the solve fails instead.
 //!
 //! A direct solution whose residual exceeds `1e-6 |b|`, and any solution
 //! that is not finite, is an error; the Krylov methods check their own
@@ -401,12 +402,25 @@ impl LinearSolver {
         } else {
             self.solve_cholesky(values, symmetric, rhs)?
         };
-        if used.is_none() {
-            // LU overwrote nothing we keep, but the Cholesky storage may hold
-            // an indefinite attempt: do not reuse it.
-            self.factor_kept = false;
+        if used.is_some() {
+            return Ok(used);
         }
-        Ok(used)
+        // LU overwrote nothing we keep, but the Cholesky storage may hold
+        // an indefinite attempt: do not reuse it.
+        self.factor_kept = false;
+        // An indefinite Hessian (a fabric folding, or compressed beyond
+        // buckling) that Cholesky refused: the node-block LU, whose 3x3
+        // pivots need no definiteness, before the pivoting LU, which costs
+        // several times more (docs/performance.md, "Indefinite Hessians
+        // of a mid-size settle").
+        if mode != LinearMode::Iterative
+            && n > block_lu_max
+            && n <= AUTO_ITERATIVE_ABOVE
+            && self.solve_block_lu(values, symmetric, rhs)?
+        {
+            return Ok(Some(Factorization::BlockLu));
+        }
+        Ok(None)
     }
 
     /// Factorises by the node-block LU and solves for `b`, leaving the
@@ -967,6 +981,48 @@ pub(super) mod tests {
                 .map(|(a, c)| (a - c).abs())
                 .fold(0.0, f64::max);
             assert!(err < 1e-10, "{err:e}");
+        }
+    }
+
+    /// A symmetric indefinite system above the block LU's size (a 45 x 45
+    /// node grid, 6,348 unknowns; one component's Laplacian negated):
+    /// Cholesky refuses it, the node-block LU solves it — no pivoting LU
+    /// — to a residual of 1e-10, in `direct` and `auto` alike.
+    #[test]
+    fn an_indefinite_system_goes_to_the_block_lu_before_lu() {
+        use crate::solver::SparsePattern;
+        let n = 45;
+        let p = SparsePattern::triangle_grid(n, n);
+        let (ptr, rows) = p.node_graph();
+        let mut v = vec![0.0; p.nnz()];
+        for b in 0..(n + 1) * (n + 1) {
+            let deg = (ptr[b + 1] - ptr[b] - 1) as f64;
+            for q in ptr[b]..ptr[b + 1] {
+                for i in 0..3 {
+                    let x = if rows[q] == b { deg + 0.05 } else { -1.0 };
+                    v[p.entry(q, b, i, i)] = if i == 2 { -x } else { x };
+                }
+            }
+        }
+        let dim = p.dimension();
+        assert!(dim > BLOCK_LU_MAX_SYMMETRIC);
+        let b: Vec<f64> = (0..dim).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
+        for mode in [LinearMode::Direct, LinearMode::Auto] {
+            let mut solver = LinearSolver::new(&p.col_ptr, &p.row_idx)
+                .unwrap()
+                .with_transpose(p.transpose_map().to_vec())
+                .with_node_blocks(ptr, rows)
+                .with_mode(mode);
+            let mut x = b.clone();
+            assert_eq!(
+                solver.solve(&v, true, &mut x).unwrap(),
+                Factorization::BlockLu,
+                "{mode:?}"
+            );
+            assert_eq!(solver.stats.cholesky_factorizations, 1);
+            assert_eq!(solver.stats.lu_factorizations, 0);
+            let r = residual(&p.col_ptr, &p.row_idx, &v, &x, &b);
+            assert!(r < 1e-10, "{mode:?}: residual {r:e}");
         }
     }
 
