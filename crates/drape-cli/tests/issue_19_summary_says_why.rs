@@ -9,9 +9,10 @@
 mod issue_19_support;
 
 use issue_19_support::{
-    DRAPE, drape as drape_args, falling_plate, history_rows, scratch, spawn_run, summary, text,
-    wait_for_history,
+    DRAPE, drape as drape_args, falling_plate, history_rows, scratch, send, spawn_run, summary,
+    text, wait_for_history,
 };
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
@@ -110,37 +111,21 @@ fn number(summary: &str, key: &str) -> f64 {
 #[cfg(unix)]
 #[test]
 fn a_history_row_that_cannot_be_written_is_in_the_summary() {
-    use std::os::unix::process::CommandExt;
     let dir = scratch("why-history");
     // A frame only at the start (and the end): the history is the file
     // that grows, about 300 bytes a row.
     let scenario = falling_plate(&dir, 1000, "[output]\nevery = 100000");
     let out = dir.join("out");
-    const LIMIT: libc::rlim_t = 16 * 1024;
-    let mut command = Command::new(DRAPE);
-    command
-        .arg("run")
-        .arg(&scenario)
-        .arg("--out")
-        .arg(&out)
-        .arg("--quiet")
-        .stdin(Stdio::null());
-    // SAFETY: between fork and exec the closure only calls signal(2) and
-    // setrlimit(2), which are async-signal-safe.
-    unsafe {
-        command.pre_exec(|| {
-            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
-            let limit = libc::rlimit {
-                rlim_cur: LIMIT,
-                rlim_max: LIMIT,
-            };
-            if libc::setrlimit(libc::RLIMIT_FSIZE, &limit) != 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            Ok(())
-        });
-    }
-    let o = command.output().expect("spawn drape");
+    const LIMIT: u64 = 16 * 1024;
+    let o = drape_with_file_limit(
+        &[
+            "run".as_ref(),
+            scenario.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ],
+        LIMIT,
+    );
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{e}");
     let s = summary(&out);
@@ -171,6 +156,71 @@ fn a_history_row_that_cannot_be_written_is_in_the_summary() {
             .map(|r| r[columns.iter().position(|c| c == "iterations").unwrap()])
             .sum::<f64>()
     );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `drape ARGS --quiet` with files limited to `limit` bytes
+/// (`RLIMIT_FSIZE`; SIGXFSZ ignored, so a write past it fails with EFBIG).
+fn drape_with_file_limit(args: &[&OsStr], limit: u64) -> Output {
+    use std::os::unix::process::CommandExt;
+    let mut command = Command::new(DRAPE);
+    command.args(args).arg("--quiet").stdin(Stdio::null());
+    // SAFETY: between fork and exec the closure only calls signal(2) and
+    // setrlimit(2), which are async-signal-safe.
+    unsafe {
+        command.pre_exec(move || {
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            let limit = libc::rlimit {
+                rlim_cur: limit as libc::rlim_t,
+                rlim_max: limit as libc::rlim_t,
+            };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &limit) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    command.output().expect("spawn drape")
+}
+
+/// A resumed session whose first history row cannot be written: the
+/// summary describes the history's last row — the checkpoint's, where the
+/// interrupted session stopped — not the step the resumed session
+/// computed and could not record.
+#[test]
+fn a_resume_whose_first_row_cannot_be_written_reports_the_checkpoint() {
+    let dir = scratch("why-resume-row");
+    let scenario = falling_plate(&dir, 1_000_000, "[output]\nevery = 100000");
+    let out = dir.join("out");
+    let child = spawn_run(&scenario, &out);
+    wait_for_history(&out, 20);
+    send(&child, "TERM");
+    let o = child.wait_with_output().expect("wait for drape");
+    assert_eq!(o.status.code(), Some(143), "{}", stderr(&o));
+    let (_, before) = history_table(&out);
+    // Room for less than a row: the resumed session's first row fails.
+    let size = std::fs::metadata(out.join("history.csv")).unwrap().len();
+    let o = drape_with_file_limit(
+        &["run".as_ref(), "--resume".as_ref(), out.as_os_str()],
+        size + 10,
+    );
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    let s = summary(&out);
+    assert_eq!(s["status"], "failed", "{s}");
+    assert!(
+        s["message"].as_str().unwrap().contains("history.csv"),
+        "{s}"
+    );
+    let (columns, rows) = history_table(&out);
+    assert_eq!(rows.len(), before.len(), "the history is the checkpoint's");
+    assert_eq!(s["steps"].as_u64().unwrap() as usize + 1, rows.len());
+    let last = rows.last().unwrap();
+    let column = |name: &str| last[columns.iter().position(|c| c == name).unwrap()];
+    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    for key in ["time", "kinetic_energy", "strain_energy", "external_work"] {
+        assert_eq!(number(&text, key), column(key), "{key}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -202,10 +202,11 @@ struct History<'a> {
     setup: &'a Setup,
     writer: HistoryWriter,
     scratch: Vec<f64>,
-    /// The figures of the last row this session wrote: what the summary
-    /// reports, so that it describes the history on disk even when the
-    /// next row could not be written.
-    last: Option<Figures>,
+    /// The figures of the history's last row on disk — this session's
+    /// last, or the checkpoint's of a resumed session that has written
+    /// none: what the summary reports, so that it describes the history
+    /// even when the next row could not be written.
+    last: Figures,
 }
 
 /// The history's column names, in order.
@@ -286,9 +287,7 @@ impl History<'_> {
         ]);
         let path = self.writer.path().to_path_buf();
         self.writer.write_row(&row).map_err(io_err(&path))?;
-        self.last
-            .get_or_insert_with(Figures::default)
-            .set(self.setup, state, kinetic, r.strain);
+        self.last.set(self.setup, state, kinetic, r.strain);
         Ok(kinetic)
     }
 }
@@ -721,19 +720,10 @@ impl Stepper<'_, '_> {
         let interrupted = matches!(end, End::Interrupted);
         let at_rest = matches!(end, End::AtRest);
         self.output_seconds += output_start.elapsed().as_secs_f64();
-        let (state, counters) = (&self.state, &self.counters);
+        let counters = &self.counters;
         // The summary reports the history's last row: the state itself,
-        // unless its row could not be written; a resumed session that
-        // wrote none ends at its checkpoint's state, the last row there.
-        let figures = match self.history.last.take() {
-            Some(figures) => figures,
-            None => {
-                let kinetic = setup
-                    .model
-                    .kinetic_energy(&state.velocities, &mut self.history.scratch);
-                Figures::of(setup, state, kinetic, counters.last_strain)
-            }
-        };
+        // unless its row could not be written.
+        let figures = std::mem::take(&mut self.history.last);
         let interruption = interrupted.then(|| {
             format!(
                 "interrupted after step {} at t = {:.6} s; resume with `drape run --resume {}`",

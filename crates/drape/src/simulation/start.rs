@@ -5,6 +5,7 @@
 use super::checkpoint::{Checkpoint, CheckpointError, Counters};
 use super::frames::Snapshot;
 use super::schedule::{ScheduleMismatch, StepController};
+use super::summary::Figures;
 use super::{History, RunError, StepRecord, checkpoint_path, contact_report, history_columns};
 use super::{io_err, setup_failure};
 use crate::integrator::State;
@@ -178,6 +179,13 @@ pub(super) fn resume<'a>(
         .map(|(t, k)| (*t, frame_relative_path(*k as u64)))
         .collect();
     let history_path = out.join("history.csv");
+    // The history's last row is the checkpoint's state until this
+    // session writes one.
+    let mut scratch = vec![0.0; setup.model.dofs()];
+    let kinetic = setup
+        .model
+        .kinetic_energy(&ck.state.velocities, &mut scratch);
+    let last = Figures::of(setup, &ck.state, kinetic, ck.counters.last_strain);
     let history = History {
         setup,
         writer: HistoryWriter::resume(
@@ -189,8 +197,8 @@ pub(super) fn resume<'a>(
             path: history_path.clone(),
             error,
         })?,
-        scratch: vec![0.0; setup.model.dofs()],
-        last: None,
+        scratch,
+        last,
     };
     let pvd = PvdWriter::resume(out.join("fields.pvd"), entries).map_err(io_err(out))?;
     Ok(Start {
@@ -231,7 +239,8 @@ pub(super) fn fresh<'a>(
         writer: HistoryWriter::create(&history_path, &history_columns(setup))
             .map_err(io_err(&history_path))?,
         scratch: vec![0.0; model.dofs()],
-        last: None,
+        // Set by the first row, below.
+        last: Figures::default(),
     };
     let strain0 = model.strain_energy(&state.positions);
     let (stretch0, fractions0) = model.stretch_and_states(&state.positions);

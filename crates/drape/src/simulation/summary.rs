@@ -231,7 +231,7 @@ pub(super) fn summary(
 
 /// The figures of the initial state, at rest and unstrained: the
 /// summary of a run that could not start.
-pub(super) fn initial_figures(setup: &Setup) -> Figures {
+fn initial_figures(setup: &Setup) -> Figures {
     let state = State::at_rest(&setup.model, setup.model.initial_positions());
     Figures::of(setup, &state, 0.0, 0.0)
 }
