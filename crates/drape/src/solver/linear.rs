@@ -28,9 +28,10 @@
 //!    the wrinkling tangent) solved by GMRES preconditioned by the
 //!    Cholesky factor of its symmetric part. The factor is kept for the
 //!    reuse path and for Newton's chord steps.
-//! 5. **Block LU again**, above its size limit, for what Cholesky
-//!    refused (a Hessian that is not positive definite: a fabric folding,
-//!    a membrane in compression in statics); then **LU** with partial
+//! 5. **Block LU**, unless it was tried first, for what Cholesky refused
+//!    (a Hessian that is not positive definite: a fabric folding, a
+//!    membrane in compression in statics) or did not bring GMRES through;
+//!    then **LU** with partial
 //!    pivoting and a COLAMD ordering, for what nothing above solved — both
 //!    up to 300,000 unknowns, above which their fill would take tens of
 //!    gigabytes and the solve fails instead.
@@ -131,7 +132,8 @@ pub struct LinearStats {
 
 /// Above this many unknowns `auto` solves by multigrid-preconditioned
 /// Krylov iterations (a reused factorisation as the fallback), and no solve
-/// falls back to sparse LU (whose fill would take tens of gigabytes).
+/// falls back to the node-block LU or sparse LU (whose fill would take
+/// tens of gigabytes).
 const AUTO_ITERATIVE_ABOVE: usize = 300_000;
 /// Largest symmetric system (unknowns) that `direct` and `auto` factorise
 /// by the node-block LU: above it faer's supernodal Cholesky, whose dense
@@ -147,7 +149,7 @@ const BLOCK_LU_MAX_GENERAL: usize = 15_000;
 /// Krylov iterations a reused factor gets before the matrix is refactorised.
 const REUSE_ITERATIONS: usize = 8;
 /// Most GMRES iterations preconditioned by the factor of the symmetric
-/// part before LU takes over.
+/// part before the node-block LU, then LU, take over.
 const SYMMETRIC_PART_ITERATIONS: usize = 100;
 /// Most multigrid-preconditioned Krylov iterations before the one-level
 /// preconditioner is tried.
@@ -164,7 +166,7 @@ pub enum LinearMode {
     /// A fresh factorisation for every solve: the node-block LU for small
     /// systems; else Cholesky when symmetric positive definite, GMRES
     /// preconditioned by the Cholesky factor of the symmetric part when not
-    /// symmetric; LU otherwise.
+    /// symmetric; the node-block LU, then LU, otherwise.
     Direct,
     /// `direct` up to 300,000 unknowns; above (where a sparse
     /// factorisation costs tens of seconds and gigabytes) `iterative`, with
@@ -322,8 +324,8 @@ impl LinearSolver {
     /// Solves `A x = b` in place (`rhs`: `b` in, `x` out) for the values
     /// `values` on the pattern, by the cascade of the module's
     /// documentation. `symmetric` says that `A` is: Cholesky and CG are
-    /// then open, and LU is the fallback when `A` is not positive
-    /// definite.
+    /// then open, and the node-block LU, then LU, are the fallback when
+    /// `A` is not positive definite.
     pub fn solve(
         &mut self,
         values: &[f64],
@@ -376,10 +378,8 @@ impl LinearSolver {
         } else {
             BLOCK_LU_MAX_GENERAL
         };
-        if mode == LinearMode::Direct
-            && n <= block_lu_max
-            && self.solve_block_lu(values, symmetric, rhs)?
-        {
+        let block_lu_first = mode == LinearMode::Direct && n <= block_lu_max;
+        if block_lu_first && self.solve_block_lu(values, symmetric, rhs)? {
             return Ok(Some(Factorization::BlockLu));
         }
         // Reuse the kept factor (of an earlier Hessian) as a preconditioner
@@ -405,18 +405,21 @@ impl LinearSolver {
         if used.is_some() {
             return Ok(used);
         }
-        // LU overwrote nothing we keep, but the Cholesky storage may hold
-        // an indefinite attempt: do not reuse it.
+        // The Cholesky storage may hold an unfinished attempt: do not
+        // reuse it.
         self.factor_kept = false;
         // An indefinite Hessian (a fabric folding, or compressed beyond
-        // buckling) that Cholesky refused: the node-block LU, whose 3x3
-        // pivots need no definiteness, before the pivoting LU, which costs
-        // several times more (docs/performance.md, "Indefinite Hessians
-        // of a mid-size settle").
-        if mode != LinearMode::Iterative
-            && n > block_lu_max
+        // buckling) that Cholesky refused, or a non-symmetric one its
+        // symmetric part's factor did not bring GMRES through: the
+        // node-block LU, whose 3x3 pivots need no definiteness, unless it
+        // was tried first, before the pivoting LU, which costs several
+        // times more (docs/performance.md, "Indefinite Hessians of a
+        // mid-size settle"). A block LU it cannot analyse leaves the
+        // system to LU, as before it existed.
+        if !block_lu_first
+            && mode != LinearMode::Iterative
             && n <= AUTO_ITERATIVE_ABOVE
-            && self.solve_block_lu(values, symmetric, rhs)?
+            && self.solve_block_lu(values, symmetric, rhs).unwrap_or(false)
         {
             return Ok(Some(Factorization::BlockLu));
         }
@@ -986,8 +989,9 @@ pub(super) mod tests {
 
     /// A symmetric indefinite system above the block LU's size (a 45 x 45
     /// node grid, 6,348 unknowns; one component's Laplacian negated):
-    /// Cholesky refuses it, the node-block LU solves it — no pivoting LU
-    /// — to a residual of 1e-10, in `direct` and `auto` alike.
+    /// Cholesky refuses it, the node-block LU solves it once — no pivoting
+    /// LU — to a residual of 1e-10, in `direct` and `auto` alike, and its
+    /// factor serves a chord step.
     #[test]
     fn an_indefinite_system_goes_to_the_block_lu_before_lu() {
         use crate::solver::SparsePattern;
@@ -1020,9 +1024,16 @@ pub(super) mod tests {
                 "{mode:?}"
             );
             assert_eq!(solver.stats.cholesky_factorizations, 1);
+            assert_eq!(solver.stats.block_lu_factorizations, 1);
             assert_eq!(solver.stats.lu_factorizations, 0);
             let r = residual(&p.col_ptr, &p.row_idx, &v, &x, &b);
             assert!(r < 1e-10, "{mode:?}: residual {r:e}");
+            // Newton's chord steps reuse the block LU's factor.
+            let b2: Vec<f64> = (0..dim).map(|i| ((i * 3) % 7) as f64 - 3.0).collect();
+            let mut x2 = b2.clone();
+            assert!(solver.solve_again(&mut x2), "{mode:?}");
+            let r2 = residual(&p.col_ptr, &p.row_idx, &v, &x2, &b2);
+            assert!(r2 < 1e-8, "{mode:?}: chord residual {r2:e}");
         }
     }
 
