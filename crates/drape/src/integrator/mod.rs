@@ -221,26 +221,6 @@ pub(crate) fn solve_step(
     old_ext: &[f64],
     my: &mut [f64],
 ) -> Result<(NewtonReport, f64), NewtonError> {
-    let result = solve_step_from(model, terms, contact, y, length, settings, ws, f_ext, my);
-    if result.is_err() {
-        f_ext.copy_from_slice(old_ext);
-    }
-    result
-}
-
-/// [`solve_step`] but for the restoring of `f_ext` after an error.
-#[allow(clippy::too_many_arguments)]
-fn solve_step_from(
-    model: &Model,
-    terms: StepTerms,
-    contact: &mut Option<ContactState>,
-    y: &mut [f64],
-    length: f64,
-    settings: &NewtonSettings,
-    ws: &mut NewtonWorkspace,
-    f_ext: &mut [f64],
-    my: &mut [f64],
-) -> Result<(NewtonReport, f64), NewtonError> {
     let saved = contact.clone();
     let mut total: Option<NewtonReport> = None;
     let mut rounds = 0;
@@ -254,7 +234,9 @@ fn solve_step_from(
     {
         cm.admit_penetrating(y, terms.time, state, model.fixed(), length);
     }
-    loop {
+    // The loop returns on success and breaks with the error, after which
+    // the contact state and the external forces are the step's start's.
+    let error = loop {
         let mut potential = step_potential(model, &terms, &mut *f_ext, &mut *my);
         if rounds == 0 {
             let ctx = StepContext {
@@ -279,10 +261,7 @@ fn solve_step_from(
         drop(system);
         let report = match result {
             Ok(r) => r,
-            Err(e) => {
-                *contact = saved;
-                return Err(e);
-            }
+            Err(e) => break e,
         };
         total = Some(match total {
             None => report,
@@ -306,10 +285,12 @@ fn solve_step_from(
         }
         rounds += 1;
         if rounds > MAX_ACTIVE_SET_ROUNDS {
-            *contact = saved;
-            return Err(NewtonError::ActiveSetCycle { rounds });
+            break NewtonError::ActiveSetCycle { rounds };
         }
-    }
+    };
+    *contact = saved;
+    f_ext.copy_from_slice(old_ext);
+    Err(error)
 }
 
 fn empty_report() -> NewtonReport {
