@@ -136,13 +136,13 @@ pub fn energy(patch: &Patch, x: &[[f64; 3]]) -> f64 {
 
 /// The bending energy of `patch` at `x`; with `hessian`, also its gradient
 /// and Hessian into `out` (the gradient always).
-///
-/// Longer than a function should be, and kept whole: it is one formula,
-/// the energy, its gradient and its Hessian (Gauss–Newton and curvature
-/// parts) written from the same intermediates (`n`, `r`, `v`, `J_k`, `M`)
-/// in the order the finite-difference tests and the bit-identical runs
-/// were checked in; cut into pieces, each would take most of them as
-/// arguments.
+//
+// Longer than a function should be, and kept whole: it is one formula,
+// the energy, its gradient and its Hessian (Gauss–Newton and curvature
+// parts) written from the same intermediates (`n`, `r`, `v`, `J_k`, `M`)
+// in the order the finite-difference tests and the bit-identical runs
+// were checked in; cut into pieces, each would take most of them as
+// arguments.
 pub fn evaluate(patch: &Patch, x: &[[f64; 3]], hessian: bool, out: &mut Local) -> f64 {
     let len = patch.len();
     debug_assert_eq!(x.len(), len);

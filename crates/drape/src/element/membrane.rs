@@ -126,11 +126,11 @@ pub(crate) fn element_force_hessian_or_zero(
 }
 
 /// [`element_force_hessian`] for `N` nodes.
-///
-/// About 120 lines, kept whole: the kernel of the module docs' formulas,
-/// spelled in their letters, sharing `F`, `E`, `S`, `C` and `B` between
-/// the force and the Hessian in the order the element's results are
-/// checked bit for bit.
+//
+// About 120 lines, kept whole: the kernel of the module docs' formulas,
+// spelled in their letters, sharing `F`, `E`, `S`, `C` and `B` between
+// the force and the Hessian in the order the element's results are
+// checked bit for bit.
 #[allow(non_snake_case)]
 #[inline]
 fn force_hessian<const N: usize>(

@@ -162,7 +162,7 @@ impl ModelBuilder {
             material.axis(),
         )?;
         let colours = colour_elements(mesh.node_count(), mesh.elements());
-        let parallel = mesh.element_count() >= PARALLEL_ABOVE;
+        let parallel = parallel_for(&mesh);
         let halves = (!parallel).then(|| Halves::new(&mesh, &colours));
         let mut bending = match bending {
             Some(rigidity) => Some(Bending::new(&mesh, rigidity)?),
@@ -387,6 +387,11 @@ impl Halves {
 /// ([`Model::parallel`]).
 pub const PARALLEL_ABOVE: usize = 4096;
 
+/// Whether a model of `mesh` assembles on rayon's pool ([`Model::parallel`]).
+fn parallel_for(mesh: &Mesh) -> bool {
+    mesh.element_count() >= PARALLEL_ABOVE
+}
+
 impl Model {
     /// The parts of a model over `mesh` of `material`, with `section` and
     /// mass density `density` (kg/m^3); [`ModelBuilder::build`] makes it.
@@ -474,7 +479,7 @@ impl Model {
     /// (docs/performance.md, "The round before"). Results do not depend on the thread count:
     /// the splits are fixed and partial sums are added in order.
     pub fn parallel(&self) -> bool {
-        self.mesh.element_count() >= PARALLEL_ABOVE
+        parallel_for(&self.mesh)
     }
 
     /// Number of degrees of freedom (3 per node, fixed ones included).

@@ -367,12 +367,10 @@ fn build_mesh(
         MeshShape::File => file_mesh(c, spec, order, base, inputs)?,
     };
     // The generators are refused from their counts before they generate,
-    // a file by its reader before it reads more nodes than the cap.
+    // a file by its reader before it reads more nodes than the cap. A file
+    // is validated as it is read (`file_mesh`), a generated mesh is valid
+    // by construction, and the model's builder checks again.
     check_extent(c, spec, &mesh)?;
-    mesh.validate().map_err(|e| ScenarioError::Mesh {
-        file: c.file.to_path_buf(),
-        error: e.into(),
-    })?;
     Ok(mesh)
 }
 
@@ -476,15 +474,16 @@ fn check_pattern_memory(
         return Ok(());
     }
     let nodes = mesh.node_count();
-    let blocks = if bending {
-        let Ok((ptr, stencil_nodes)) = crate::bending::stencils_of(mesh) else {
+    let (ptr, stencil_nodes) = if bending {
+        let Ok(stencils) = crate::bending::stencils_of(mesh) else {
             return Ok(());
         };
-        let stencils = ptr.windows(2).map(|w| &stencil_nodes[w[0]..w[1]]);
-        crate::solver::pattern::block_count(nodes, mesh.elements().chain(stencils))
+        stencils
     } else {
-        crate::solver::pattern::block_count(nodes, mesh.elements())
+        (vec![0], Vec::new())
     };
+    let stencils = ptr.windows(2).map(|w| &stencil_nodes[w[0]..w[1]]);
+    let blocks = crate::solver::pattern::block_count(nodes, mesh.elements().chain(stencils));
     let need = pattern_estimate(blocks);
     if need <= have {
         return Ok(());

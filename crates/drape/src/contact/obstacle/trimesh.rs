@@ -679,7 +679,11 @@ pub fn read_mesh_obstacle_with_bytes(
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     let parse = match extension.as_deref() {
-        Some("obj") => crate::mesh::obj::parse_obj,
+        // The fabric's node cap (`MAX_MESH_NODES`) is not an obstacle's:
+        // an STL has none either.
+        Some("obj") => {
+            |bytes: &[u8], file: &str| crate::mesh::obj::parse_obj_at_most(bytes, file, usize::MAX)
+        }
         Some("stl") => super::stl::parse_stl,
         _ => {
             let file = path.display().to_string();
