@@ -11,6 +11,14 @@
 #   BENDING=1 scripts/settle-bench.sh                 # the drape tester with bending
 #                                                     # (settle-bending-*.toml: 2e-5 N m,
 #                                                     # no tension-field model, to rest)
+#   BENDING=1 PROJECTIONS="never progressive always" scripts/settle-bench.sh
+#                                                     # also each Newton of [solver]
+#                                                     # projection (issue 30) on the
+#                                                     # scenario
+#   BENDING=1 BASELINE=/path/to/older/drape scripts/settle-bench.sh
+#                                                     # the adaptive run with another
+#                                                     # build too (main's, from its
+#                                                     # commit in a git worktree)
 #   FIXED=1 scripts/settle-bench.sh                   # also the same scenario at fixed
 #                                                     # 1 ms steps to t = 2.1 s (no
 #                                                     # adaptive keys, no rest)
@@ -47,6 +55,18 @@ for m in $meshes; do
   scenario=crates/drape-bench/scenarios/settle-${BENDING:+bending-}$m.toml
   "$drape" run "$scenario" --out "$work/$m" --quiet || true
   report "$m adaptive" "$work/$m"
+  if [[ -n "${BASELINE:-}" && -z "${FIXED:-}" ]]; then
+    "$BASELINE" run "$scenario" --out "$work/$m-baseline" --quiet || true
+    report "$m adaptive (baseline)" "$work/$m-baseline"
+  fi
+  for p in ${PROJECTIONS:-}; do
+    # The scenario with `[solver] projection = p` (it has no [solver]).
+    copy="$(dirname "$scenario")/.settle-$m-$p.toml"
+    { cat "$scenario"; printf '\n[solver]\nprojection = "%s"\n' "$p"; } > "$copy"
+    "$drape" run "$copy" --out "$work/$m-$p" --quiet || true
+    rm -f "$copy"
+    report "$m adaptive, $p" "$work/$m-$p"
+  done
   if [[ -n "${FIXED:-}" ]]; then
     # The same scenario without the adaptive keys: fixed steps to 2.1 s.
     fixed="$(dirname "$scenario")/.settle-$m-fixed.toml"

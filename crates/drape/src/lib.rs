@@ -29,6 +29,7 @@ pub mod mesh;
 pub mod model;
 pub mod output;
 pub mod par;
+pub mod psd;
 pub mod scenario;
 pub mod simulation;
 pub mod solver;

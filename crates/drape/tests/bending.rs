@@ -77,6 +77,7 @@ fn equilibrium(model: &Model, increments: usize) -> (Vec<f64>, Vec<usize>) {
         residual_tolerance: 1e-6,
         max_iterations: 40,
         chord_steps: 0,
+        ..Default::default()
     };
     let length = reference_length(&model.initial_positions());
     let mut iterations = Vec::new();

@@ -82,7 +82,18 @@ fn penalty_terms(
     let pattern = SparsePattern::new(1, std::iter::once(&[0usize][..]));
     let mut g = vec![0.0; 3];
     let mut h = vec![0.0; pattern.nnz()];
-    let e = model.add_penalty(eta, &y, 0.3, hints, &mut g, Some((&mut h, &pattern)));
+    let e = model.add_penalty(
+        eta,
+        &y,
+        0.3,
+        hints,
+        &mut g,
+        Some(drape::contact::PenaltyHessian {
+            values: &mut h,
+            pattern: &pattern,
+            project: None,
+        }),
+    );
     let mut dense = vec![0.0; 9];
     for c in 0..3 {
         for k in pattern.col_ptr[c]..pattern.col_ptr[c + 1] {

@@ -40,6 +40,7 @@ pub mod patch;
 use crate::element::geometry::AxisError;
 use crate::mesh::Mesh;
 use crate::par::Shared;
+use crate::psd::Projector;
 use crate::solver::SparsePattern;
 use patch::{Patch, PatchError};
 
@@ -378,19 +379,27 @@ impl Bending {
     /// [`crate::model::PARALLEL_ABOVE`] elements or more) each colour's
     /// patches run in parallel chunks, whose energies are summed in order:
     /// the result does not depend on the number of threads.
+    ///
+    /// With `project`, the Hessian of every patch with a node flagged
+    /// there (one flag per node) is replaced by its positive semi-definite
+    /// part ([`crate::psd`]) before it is added (the projected Newton of
+    /// `solver::newton`).
     pub fn add(
         &self,
         pattern: &SparsePattern,
         y: &[f64],
         g: &mut [f64],
         h: Option<&mut [f64]>,
+        project: Option<&[bool]>,
     ) -> f64 {
         use rayon::prelude::*;
         let (node_ptr, _) = pattern.node_graph();
         let want_h = h.is_some();
         let hp = Shared(h.map_or(std::ptr::null_mut(), |h| h.as_mut_ptr()));
         let gp = Shared(g.as_mut_ptr());
-        let work = |local: &mut kernel::Local, list: &mut dyn Iterator<Item = usize>| -> f64 {
+        let work = |(local, projector): &mut (kernel::Local, Option<Projector>),
+                    list: &mut dyn Iterator<Item = usize>|
+         -> f64 {
             let mut x = [[0.0; 3]; kernel::MAX_NODES];
             let mut energy = 0.0;
             for k in list {
@@ -401,6 +410,11 @@ impl Bending {
                     x[k] = [y[3 * a], y[3 * a + 1], y[3 * a + 2]];
                 }
                 energy += kernel::evaluate(p, &x[..len], want_h, local);
+                if want_h && project.is_some_and(|flags| nodes.iter().any(|&a| flags[a])) {
+                    let m = 3 * len;
+                    let projector = projector.get_or_insert_with(Projector::new);
+                    projector.project(local.hessian.as_flattened_mut(), m, kernel::MAX_DOFS);
+                }
                 // SAFETY: patches that run at once (of one colour) share no
                 // node, so the gradient entries and Hessian blocks written
                 // below are disjoint across threads; the indices are those
@@ -433,16 +447,17 @@ impl Bending {
             energy
         };
         if self.colours.is_empty() {
-            let mut local = kernel::Local::new();
+            let mut local = (kernel::Local::new(), None);
             return work(&mut local, &mut (0..self.patches.len()));
         }
         let mut energy = 0.0;
         for colour in &self.colours {
             let parts: Vec<f64> = colour
                 .par_chunks(CHUNK)
-                .map_init(kernel::Local::new, |local, chunk| {
-                    work(local, &mut chunk.iter().copied())
-                })
+                .map_init(
+                    || (kernel::Local::new(), None),
+                    |local, chunk| work(local, &mut chunk.iter().copied()),
+                )
                 .collect();
             energy += parts.iter().sum::<f64>();
         }
@@ -529,7 +544,7 @@ mod tests {
         let run = |b: &Bending| {
             let mut g = vec![0.0; y.len()];
             let mut h = vec![0.0; pattern.nnz()];
-            let e = b.add(&pattern, &y, &mut g, Some(&mut h));
+            let e = b.add(&pattern, &y, &mut g, Some(&mut h), None);
             (e, g, h)
         };
         let (e0, g0, h0) = run(&serial);

@@ -27,6 +27,7 @@ pub mod obstacle;
 pub mod penalty;
 
 pub use obstacle::{Obstacle, ObstacleError, Proximity};
+pub use penalty::PenaltyHessian;
 
 use crate::vec3::{add, norm, scale, sub};
 use rayon::prelude::*;

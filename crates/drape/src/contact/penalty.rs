@@ -11,12 +11,30 @@
 //! surface a node carrying a force `F` penetrates by `F / eta`.
 
 use super::{ContactModel, ContactState};
+use crate::psd::Projector;
 use crate::solver::SparsePattern;
+
+/// Where [`ContactModel::add_penalty`] adds its Hessian: the values on
+/// the model's pattern, and which nodes' pair Hessians it projects to
+/// their positive semi-definite part (`None`: none).
+#[derive(Debug)]
+pub struct PenaltyHessian<'a> {
+    /// The Hessian's values on `pattern`.
+    pub values: &'a mut [f64],
+    /// The model's sparse pattern.
+    pub pattern: &'a SparsePattern,
+    /// One flag per node: whose pair Hessians are projected.
+    pub project: Option<&'a [bool]>,
+}
 
 impl ContactModel {
     /// Adds the penalty terms at positions `y`, time `t`, to `g` and (if
     /// given) to the Hessian values `h` on `pattern`; returns the penalty
-    /// energy (J).
+    /// energy (J). With node flags in `h`'s third part, the 3x3 Hessian of
+    /// a pair whose node is flagged there is replaced by its positive semi-definite part
+    /// ([`crate::psd`]): `eta (n n^T + g dn/dy)` is indefinite where the
+    /// node penetrates a convex surface (`g < 0`, `dn/dy` positive on the
+    /// tangent plane).
     pub fn add_penalty(
         &self,
         stiffness: f64,
@@ -24,25 +42,38 @@ impl ContactModel {
         t: f64,
         state: &ContactState,
         g: &mut [f64],
-        h: Option<(&mut [f64], &SparsePattern)>,
+        h: Option<PenaltyHessian>,
     ) -> f64 {
         let (pairs, _) = self.near_pairs(y, t, state, 0.0, false);
         let mut energy = 0.0;
         let mut h = h;
+        let mut projector = None;
         for (p, _, prox) in pairs {
             let (gap, n, dn) = (prox.gap, prox.normal, prox.normal_derivative);
             energy += 0.5 * stiffness * gap * gap;
             for i in 0..3 {
                 g[3 * p + i] += stiffness * gap * n[i];
             }
-            if let Some((h, pattern)) = h.as_mut() {
+            if let Some(PenaltyHessian {
+                values: h,
+                pattern,
+                project,
+            }) = h.as_mut()
+            {
                 let block = pattern
                     .node_block(p, p)
                     .expect("diagonal blocks are in the pattern");
+                let mut k: [f64; 9] = std::array::from_fn(|ij| {
+                    stiffness * (n[ij / 3] * n[ij % 3] + gap * dn[ij / 3][ij % 3])
+                });
+                if project.is_some_and(|flags| flags[p]) {
+                    projector
+                        .get_or_insert_with(Projector::new)
+                        .project(&mut k, 3, 3);
+                }
                 for i in 0..3 {
                     for j in 0..3 {
-                        h[pattern.entry(block, p, i, j)] +=
-                            stiffness * (n[i] * n[j] + gap * dn[i][j]);
+                        h[pattern.entry(block, p, i, j)] += k[3 * i + j];
                     }
                 }
             }

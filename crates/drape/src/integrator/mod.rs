@@ -12,6 +12,7 @@ pub use statics::StaticStepper;
 
 use crate::contact::lagrange::{ActiveNode, MAX_ACTIVE_SET_ROUNDS, REVISIONS_IN_NEWTON};
 use crate::contact::{ContactMethod, ContactModel, ContactState};
+use crate::material::CRITICAL_STRETCH;
 use crate::model::Model;
 use crate::solver::newton::{
     self, Evaluation, NewtonError, NewtonReport, NewtonSettings, NewtonSystem, NewtonWorkspace,
@@ -79,6 +80,18 @@ pub(crate) struct StepSystem<'a> {
     pub strain_energy: f64,
     /// Lagrange: the active nodes at the last evaluation.
     pub active: Vec<ActiveNode>,
+    /// The nodes whose stencils' Hessians are projected to their
+    /// positive semi-definite part ([`NewtonSystem::project`]), when
+    /// `projecting`.
+    pub project: Vec<bool>,
+    /// Whether Hessians are projected.
+    pub projecting: bool,
+    /// Whether the step's terms are all potentials (a hyperelastic
+    /// membrane, no follower pressure) and no multipliers constrain it:
+    /// only then are Hessians ever projected (the stress projection's
+    /// tangent and the pressure's are not a potential's Hessian, and
+    /// projecting the bending beside them would only spoil the tangent).
+    pub can_project: bool,
 }
 
 impl NewtonSystem for StepSystem<'_> {
@@ -88,6 +101,7 @@ impl NewtonSystem for StepSystem<'_> {
         let ctx = StepContext {
             time: self.time,
             contact: self.contact.as_deref(),
+            project: (self.projecting && self.can_project).then_some(&self.project[..]),
         };
         let value = self.potential.evaluate(&ctx, y, g, h.as_deref_mut());
         self.strain_energy = self.potential.value("membrane").map_or(0.0, |v| v.value);
@@ -122,6 +136,14 @@ impl NewtonSystem for StepSystem<'_> {
 
     fn transform_increment(&self, dy: &mut [f64]) {
         ContactModel::rotate_back(&self.active, dy);
+    }
+
+    fn project(&mut self, nodes: Option<&[bool]>) {
+        self.projecting = nodes.is_some();
+        if let Some(nodes) = nodes {
+            self.project.clear();
+            self.project.extend_from_slice(nodes);
+        }
     }
 
     /// Multipliers: the active set revised after a Newton step, as after
@@ -236,12 +258,18 @@ pub(crate) fn solve_step(
     }
     // The loop returns on success and breaks with the error, after which
     // the contact state and the external forces are the step's start's.
+    let can_project = model.material().is_hyperelastic()
+        && terms.pressure == 0.0
+        && model
+            .contact()
+            .is_none_or(|c| c.method != ContactMethod::Lagrange);
     let error = loop {
         let mut potential = step_potential(model, &terms, &mut *f_ext, &mut *my);
         if rounds == 0 {
             let ctx = StepContext {
                 time: terms.time,
                 contact: contact.as_ref(),
+                project: None,
             };
             potential.begin_step(&ctx, y);
         }
@@ -254,6 +282,9 @@ pub(crate) fn solve_step(
             revisions: REVISIONS_IN_NEWTON,
             strain_energy: 0.0,
             active: Vec::new(),
+            project: Vec::new(),
+            projecting: false,
+            can_project,
         };
         let result = newton::solve(&mut system, y, length, settings, ws);
         let strain = system.strain_energy;
@@ -271,15 +302,23 @@ pub(crate) fn solve_step(
                 t.residuals.extend(report.residuals);
                 t.increments.extend(report.increments);
                 t.factorization = report.factorization.or(t.factorization);
+                t.shifts += report.shifts;
+                t.projections += report.projections;
                 t
             }
         });
         let (Some(cm), Some(state)) = (model.contact(), contact.as_mut()) else {
+            if let Some(e) = unstable(model, y) {
+                break e;
+            }
             return Ok((total.unwrap_or_else(empty_report), strain));
         };
         let changed = cm.method == ContactMethod::Lagrange
             && cm.update_active_set(y, terms.time, state, &active, model.fixed(), length);
         if !changed {
+            if let Some(e) = unstable(model, y) {
+                break e;
+            }
             cm.refresh_features(y, terms.time, state);
             return Ok((total.unwrap_or_else(empty_report), strain));
         }
@@ -293,6 +332,20 @@ pub(crate) fn solve_step(
     Err(error)
 }
 
+/// A converged step that compresses an element of a membrane without
+/// tension field below [`CRITICAL_STRETCH`] (Saint-Venant–Kirchhoff's
+/// compressive instability) is no solution to keep: an error, so that
+/// the step is cut back. Newton minimising a step's energy can reach the
+/// collapsed branch, of lower energy, where a shorter step (a larger
+/// mass term) stays on the one the motion follows.
+fn unstable(model: &Model, y: &[f64]) -> Option<NewtonError> {
+    if model.material().wrinkle_state([0.0; 3]).is_some() {
+        return None;
+    }
+    let (stretch, element) = model.min_stretch(y);
+    (stretch < CRITICAL_STRETCH).then_some(NewtonError::MaterialInstability { element, stretch })
+}
+
 fn empty_report() -> NewtonReport {
     NewtonReport {
         iterations: 0,
@@ -301,5 +354,6 @@ fn empty_report() -> NewtonReport {
         increments: Vec::new(),
         factorization: None,
         shifts: 0,
+        projections: 0,
     }
 }

@@ -169,6 +169,10 @@ impl Newmark {
             pressure: model.pressure_at(t1, None),
             time: t1,
         };
+        let settings = &NewtonSettings {
+            dt: Some(dt),
+            ..*settings
+        };
         let (report, strain_energy) = solve_step(
             model,
             terms,

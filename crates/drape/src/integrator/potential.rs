@@ -40,6 +40,22 @@ pub struct StepContext<'a> {
     pub time: f64,
     /// Contact features and active set of the step, with obstacles.
     pub contact: Option<&'a ContactState>,
+    /// Which stencil Hessians a term projects to their positive
+    /// semi-definite part ([`crate::psd`]) before adding them: those of
+    /// the stencils with a node flagged here (one flag per node; `None`:
+    /// none, the exact Hessian). Newton asks for it where the exact
+    /// Hessian is not positive definite (`solver::newton`, "projected
+    /// Newton"); a term that is not a potential ignores it.
+    pub project: Option<&'a [bool]>,
+}
+
+impl StepContext<'_> {
+    /// Whether the stencil of `nodes` is to be projected.
+    #[inline]
+    pub fn projects(&self, nodes: &[usize]) -> bool {
+        self.project
+            .is_some_and(|flags| nodes.iter().any(|&a| flags[a]))
+    }
 }
 
 /// Which nodes a term couples, so that the sparse pattern of the Hessian
@@ -278,6 +294,7 @@ mod tests {
             let ctx = StepContext {
                 time: 1.0,
                 contact: None,
+                project: None,
             };
             let (eh, eg) = check_term(&mut whole, &ctx, model.pattern(), &y, 1e-7);
             assert!(eh < 1e-6, "order {order}: Hessian {eh:e}");
@@ -317,6 +334,7 @@ mod tests {
             let ctx = StepContext {
                 time: 1.0,
                 contact: None,
+                project: None,
             };
             let mut g = vec![f64::NAN; n];
             let v = whole.add(&ctx, &y, &mut g, None);

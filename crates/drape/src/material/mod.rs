@@ -12,7 +12,7 @@ mod svk;
 pub mod wrinkling;
 
 pub use orthotropic::{Orthotropic, OrthotropicError};
-pub use svk::SaintVenantKirchhoff;
+pub use svk::{CRITICAL_STRETCH, SaintVenantKirchhoff};
 pub use wrinkling::{WrinkleState, Wrinkling, WrinklingModel};
 
 /// The energy, stress and tangent at one strain.

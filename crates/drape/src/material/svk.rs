@@ -2,6 +2,13 @@
 
 use super::{Material, MaterialResponse};
 
+/// The stretch below which Saint-Venant–Kirchhoff loses stability in
+/// uniaxial compression: the nominal stress `Y lambda (lambda^2 - 1) / 2`
+/// has its minimum at `lambda = 1/sqrt(3)`. A step that compresses an
+/// element of a membrane without tension field below it is cut back
+/// (`integrator::solve_step`).
+pub const CRITICAL_STRETCH: f64 = 0.577_350_269_189_625_8;
+
 /// Saint-Venant–Kirchhoff, plane stress: `s = C e`, `W = 1/2 e . C e`,
 ///
 /// ```text

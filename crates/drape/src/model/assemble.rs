@@ -18,6 +18,7 @@ use crate::element::membrane::{
 };
 use crate::load::pressure::add_pressure_force;
 use crate::par::Shared;
+use crate::psd::Projector;
 use rayon::prelude::*;
 
 /// Adds (or, for a block's first element, writes) the element Hessian `k`
@@ -88,6 +89,8 @@ struct Local {
     f: [f64; 3 * MAX_NODES],
     fp: [f64; 3 * MAX_NODES],
     k: [f64; 9 * MAX_NODES * MAX_NODES],
+    /// The element Hessians' projection, made on first use.
+    projector: Option<Projector>,
 }
 
 impl Local {
@@ -97,6 +100,7 @@ impl Local {
             f: [0.0; 3 * MAX_NODES],
             fp: [0.0; 3 * MAX_NODES],
             k: [0.0; 9 * MAX_NODES * MAX_NODES],
+            projector: None,
         }
     }
 }
@@ -143,6 +147,21 @@ impl Model {
     /// and, if given, the Hessian values `h` (overwritten) `K` on
     /// [`Model::pattern`]. `y`: current positions, flattened.
     pub fn assemble(&self, y: &[f64], f_int: &mut [f64], h: Option<&mut [f64]>) -> f64 {
+        self.assemble_projected(y, f_int, h, None)
+    }
+
+    /// [`Model::assemble`], with the Hessian of every element that has a
+    /// node flagged in `project` (one flag per node) replaced by its
+    /// positive semi-definite part ([`crate::psd`]) before it is added:
+    /// the projected Newton's Hessian (`solver::newton`). `None`, or no
+    /// flag set: the exact Hessian, to the bit.
+    pub fn assemble_projected(
+        &self,
+        y: &[f64],
+        f_int: &mut [f64],
+        h: Option<&mut [f64]>,
+        project: Option<&[bool]>,
+    ) -> f64 {
         let n = self.mesh.order.nodes_per_element();
         let m = 3 * n;
         f_int.fill(0.0);
@@ -185,6 +204,10 @@ impl Model {
                     &mut local.f[..m],
                     k,
                 );
+                if want_h && !zero && project.is_some_and(|flags| el.iter().any(|&a| flags[a])) {
+                    let projector = local.projector.get_or_insert_with(Projector::new);
+                    projector.project(&mut local.k[..m * m], m, m);
+                }
                 // SAFETY: elements that run at once (of one colour, or of
                 // the two halves of a small mesh) share no node, so the
                 // entries written below are disjoint across threads.

@@ -172,7 +172,8 @@ impl Scenario {
         }
         let contact = build_contact(&c, self, &base, &mut inputs)?;
         let (analysis, adaptive, rest) = build_analysis(&c, self)?;
-        let newton = build_newton(&c, &self.solver)?;
+        let mut newton = build_newton(&c, &self.solver)?;
+        newton.projection = newton.projection.resolve(bending.is_some());
         if self.output.every == 0 {
             return Err(c.invalid("output", None, "every", "must be at least 1".into()));
         }
@@ -270,6 +271,16 @@ fn build_newton(c: &Checker, s: &SolverSpec) -> Result<NewtonSettings, ScenarioE
             format!("must be at most 30, not {}", s.max_cutbacks),
         ));
     }
+    if let Some(v) = s.speed_tolerance
+        && !(v.is_finite() && v > 0.0)
+    {
+        return Err(c.invalid(
+            t,
+            None,
+            "speed_tolerance",
+            format!("must be a speed above 0 m/s, not {v}"),
+        ));
+    }
     if s.chord_steps > 10 {
         return Err(c.invalid(
             t,
@@ -283,6 +294,9 @@ fn build_newton(c: &Checker, s: &SolverSpec) -> Result<NewtonSettings, ScenarioE
         residual_tolerance: s.residual_tolerance,
         max_iterations: s.max_iterations,
         chord_steps: s.chord_steps,
+        projection: s.projection,
+        speed_tolerance: s.speed_tolerance,
+        dt: None,
     })
 }
 

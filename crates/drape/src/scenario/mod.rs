@@ -437,6 +437,20 @@ pub struct SolverSpec {
     /// each shrinks the increment at least fourfold. Default 2.
     #[serde(default = "default_chord_steps")]
     pub chord_steps: usize,
+    /// What Newton does where the Hessian of a step whose terms are all
+    /// potentials is not positive definite (a fabric folding): `"progressive"`
+    /// (default: the stencil Hessians round the nodes of largest residual
+    /// projected to their positive semi-definite part, more until it is),
+    /// `"always"` (every stencil, every iteration) or `"never"` (the exact
+    /// Hessian, and a diagonal shift where its direction goes uphill).
+    #[serde(default)]
+    pub projection: crate::solver::newton::Projection,
+    /// Newton's increment test as a speed (m/s, > 0): in a dynamic step,
+    /// the largest nodal correction divided by the step, `max_a |dY_a| /
+    /// dt`, must be at most this (instead of `|dY| / |X| <= tolerance`);
+    /// the residual test stays. Statics keep `tolerance`. Default: none.
+    #[serde(default)]
+    pub speed_tolerance: Option<f64>,
 }
 
 impl Default for SolverSpec {
@@ -448,6 +462,8 @@ impl Default for SolverSpec {
             max_cutbacks: default_max_cutbacks(),
             linear: crate::solver::LinearMode::default(),
             chord_steps: default_chord_steps(),
+            projection: Default::default(),
+            speed_tolerance: None,
         }
     }
 }

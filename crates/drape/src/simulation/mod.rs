@@ -51,9 +51,8 @@ pub use summary::{Summary, record_failure, record_refused_resume};
 pub use warnings::{MAX_MOTION_PER_STEP, warnings};
 
 /// The stretch below which Saint-Venant–Kirchhoff loses stability in
-/// uniaxial compression: the nominal stress `Y lambda (lambda^2 - 1) / 2`
-/// has its minimum at `lambda = 1/sqrt(3)`.
-pub const SVK_CRITICAL_STRETCH: f64 = 0.577_350_269_189_625_8;
+/// uniaxial compression ([`crate::material::CRITICAL_STRETCH`]).
+pub const SVK_CRITICAL_STRETCH: f64 = crate::material::CRITICAL_STRETCH;
 
 /// What the observer hears after each converged step.
 #[derive(Debug, Clone, PartialEq)]
@@ -676,6 +675,14 @@ impl Stepper<'_, '_> {
 
     /// The error of a step that failed at size `h` after `cutbacks` halvings.
     fn step_failure(&self, h: f64, cutbacks: usize, cause: NewtonError) -> RunError {
+        if let NewtonError::MaterialInstability { element, stretch } = cause {
+            return RunError::MaterialInstability {
+                time: self.state.time + h,
+                element,
+                stretch,
+                out: self.out.to_path_buf(),
+            };
+        }
         RunError::Step {
             step: self.counters.step,
             time: self.state.time,

@@ -336,6 +336,66 @@ impl LinearSolver {
             .map_err(|failure| failure.of(Matrix::Hessian))
     }
 
+    /// Solves `A x = b` in place for a symmetric `A` that should be
+    /// positive definite (the projected Newton's Hessian), by the first
+    /// path that applies: multigrid-preconditioned CG where
+    /// [`LinearSolver::solve`] would take it, else the node-block
+    /// `L D L^T` for small systems (up to 5,000 unknowns), else sparse
+    /// Cholesky. `Ok(None)` — `rhs` then unchanged — when `A` is not
+    /// positive definite: a pivot block or pivot that is not (Sylvester's
+    /// law of inertia), or CG meeting a direction of non-positive
+    /// curvature (or not converging); no other path is tried, so that
+    /// the caller can project the Hessian and try again.
+    pub fn solve_spd(
+        &mut self,
+        values: &[f64],
+        rhs: &mut [f64],
+    ) -> Result<Option<Factorization>, LinearSolveError> {
+        self.last_krylov_iterations = 0;
+        self.last_used = None;
+        self.load_rhs(rhs);
+        let n = self.dimension();
+        let used = if self.uses_multigrid() {
+            self.solve_multigrid(values, true, rhs)
+        } else if self.mode != LinearMode::Reuse
+            && n <= BLOCK_LU_MAX_SYMMETRIC
+            && self.node_graph.is_some()
+        {
+            let solved = self
+                .solve_block_lu_spd(values, rhs)
+                .map_err(|f| f.of(Matrix::Hessian))?;
+            solved.then_some(Factorization::BlockLu)
+        } else {
+            self.factor_kept = self
+                .factor_cholesky(values)
+                .map_err(|f| f.of(Matrix::Hessian))?;
+            if self.factor_kept {
+                self.load_rhs(rhs);
+                self.cholesky
+                    .solve_in_place(&mut self.rhs, self.par, &mut self.scratch);
+                Some(Factorization::Cholesky)
+            } else {
+                None
+            }
+        };
+        let Some(used) = used else {
+            return Ok(None);
+        };
+        self.stats.solves += 1;
+        self.deliver(values, rhs, used)
+            .map_err(|f| f.of(Matrix::Hessian))?;
+        self.last_used = Some(used);
+        Ok(Some(used))
+    }
+
+    /// The node-block `L D L^T` of a matrix that should be positive
+    /// definite, solved for `b` into `self.rhs`: `Ok(false)` when a pivot
+    /// block is singular or not positive definite, or the refined
+    /// residual is above `1e-10 |b|`.
+    fn solve_block_lu_spd(&mut self, values: &[f64], b: &[f64]) -> Result<bool, SolveFailure> {
+        self.solve_block_lu_checked(values, true, b, true)
+    }
+
     /// [`LinearSolver::solve`], for any matrix: why it failed.
     fn solve_matrix(
         &mut self,
@@ -436,6 +496,18 @@ impl LinearSolver {
         symmetric: bool,
         b: &[f64],
     ) -> Result<bool, SolveFailure> {
+        self.solve_block_lu_checked(values, symmetric, b, false)
+    }
+
+    /// [`LinearSolver::solve_block_lu`]; with `positive`, also `Ok(false)`
+    /// when a pivot block is not positive definite.
+    fn solve_block_lu_checked(
+        &mut self,
+        values: &[f64],
+        symmetric: bool,
+        b: &[f64],
+        positive: bool,
+    ) -> Result<bool, SolveFailure> {
         if self.block_lu.is_none() {
             let Some((ptr, rows)) = &self.node_graph else {
                 return Ok(false);
@@ -444,7 +516,7 @@ impl LinearSolver {
         }
         let lu = self.block_lu.as_mut().expect("set above");
         self.stats.block_lu_factorizations += 1;
-        if lu.factorize(values, symmetric).is_err() {
+        if lu.factorize(values, symmetric).is_err() || (positive && !lu.pivots_positive()) {
             return Ok(false);
         }
         let (pattern, product, work) = (self.pattern.as_ref(), &self.product, &mut self.krylov);

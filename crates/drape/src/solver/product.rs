@@ -8,9 +8,10 @@
 //! * from [`PARALLEL_MATVEC_ABOVE`] unknowns, with a transpose map
 //!   (structurally symmetric patterns), row by row on all threads: row `c`
 //!   of `A` is column `c` read through the map;
-//! * else, where [`crate::par`]'s helper thread runs, by columns in two
-//!   halves, the second half into a buffer of its own added after;
-//! * else by columns on one thread.
+//! * else by columns in two halves, the second half into a buffer of its
+//!   own added after — on [`crate::par`]'s helper thread where it runs, on
+//!   the calling thread after the first where it does not (one thread, or
+//!   `RAYON_NUM_THREADS=1`): the same sums either way.
 
 use faer::sparse::SymbolicSparseColMatRef;
 use std::sync::{Mutex, PoisonError};
@@ -71,29 +72,26 @@ impl Product {
                 });
             return;
         }
-        if crate::par::helper_available() {
-            // The entries are read in storage order: rows by the transpose
-            // map cost a gather per entry, and the product took as long as
-            // the triangular solves it checks.
-            let half = n / 2;
-            let mut guard = self.half.lock().unwrap_or_else(PoisonError::into_inner);
-            guard.resize(n, 0.0);
-            let second: &mut [f64] = &mut guard;
-            let columns = |cols: std::ops::Range<usize>, out: &mut [f64]| {
-                out.fill(0.0);
-                add_columns(col_ptr, row_idx, values, x, cols, out);
-            };
-            crate::par::join(
-                || columns(0..half, &mut out[..n]),
-                || columns(half..n, second),
-            );
-            for (o, s) in out[..n].iter_mut().zip(second.iter()) {
-                *o += s;
-            }
-            return;
+        // Two halves whether or not a second thread runs the second: the
+        // sums, hence the results, do not depend on the threads.
+        // The entries are read in storage order: rows by the transpose
+        // map cost a gather per entry, and the product took as long as
+        // the triangular solves it checks.
+        let half = n / 2;
+        let mut guard = self.half.lock().unwrap_or_else(PoisonError::into_inner);
+        guard.resize(n, 0.0);
+        let second: &mut [f64] = &mut guard;
+        let columns = |cols: std::ops::Range<usize>, out: &mut [f64]| {
+            out.fill(0.0);
+            add_columns(col_ptr, row_idx, values, x, cols, out);
+        };
+        crate::par::join(
+            || columns(0..half, &mut out[..n]),
+            || columns(half..n, second),
+        );
+        for (o, s) in out[..n].iter_mut().zip(second.iter()) {
+            *o += s;
         }
-        out.fill(0.0);
-        add_columns(col_ptr, row_idx, values, x, 0..n.min(x.len()), out);
     }
 }
 

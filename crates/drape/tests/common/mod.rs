@@ -108,6 +108,7 @@ pub fn equilibrium_with(
         residual_tolerance: 1e-10,
         max_iterations: 30,
         chord_steps,
+        ..Default::default()
     };
     let length = drape::simulation::reference_length(&model.initial_positions());
     let report = drape::integrator::StaticStepper

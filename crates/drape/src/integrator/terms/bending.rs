@@ -44,14 +44,16 @@ impl StepTerm for BendingTerm<'_> {
 
     fn add(
         &mut self,
-        _ctx: &StepContext,
+        ctx: &StepContext,
         y: &[f64],
         g: &mut [f64],
         h: Option<&mut [f64]>,
     ) -> TermValue {
         self.forces.clear();
         self.forces.resize(y.len(), 0.0);
-        let value = self.bending.add(self.pattern, y, &mut self.forces, h);
+        let value = self
+            .bending
+            .add(self.pattern, y, &mut self.forces, h, ctx.project);
         let mut scale = 0.0;
         for (gi, fi) in g.iter_mut().zip(&self.forces) {
             *gi += fi;
@@ -129,6 +131,7 @@ mod tests {
         let ctx = StepContext {
             time: 0.0,
             contact: None,
+            project: None,
         };
         let rigidities = [
             BendingRigidity::Isotropic(2e-5),
@@ -165,6 +168,46 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// The projected Hessian (every patch projected) is positive
+    /// semi-definite on the folded sheet, whose exact bending Hessian
+    /// is not (the curvature's second derivatives weighted by the
+    /// moments), and is the exact one to the bit on the flat sheet,
+    /// where the moments vanish and each patch Hessian is the
+    /// semi-definite `J^T D J`. Each element order.
+    #[test]
+    fn projected_bending_hessian_is_semi_definite() {
+        use crate::integrator::terms::{check_projection, relative_smallest_eigenvalue};
+        let ctx = StepContext {
+            time: 0.0,
+            contact: None,
+            project: None,
+        };
+        for order in [
+            ElementOrder::Linear,
+            ElementOrder::Quadratic,
+            ElementOrder::Cubic,
+        ] {
+            let mesh = rectangle([0.1, 0.1], [4, 3], Pattern::Alternate, [0.0; 3], order);
+            let m = model(mesh, BendingRigidity::Isotropic(2e-5));
+            let bending = m.bending().expect("bending");
+            let n = m.initial_positions().len();
+            let mut term = BendingTerm::new(bending, m.pattern());
+            let y = folded(&m, 1.0);
+            let (exact, projected, smallest) = check_projection(&mut term, &ctx, m.pattern(), &y);
+            assert!(
+                relative_smallest_eigenvalue(&exact, n) < -1e-6,
+                "{order:?}: the folded sheet's bending Hessian is indefinite"
+            );
+            assert!(smallest > -1e-12, "{order:?}: projected {smallest:e}");
+            assert_ne!(exact, projected);
+            let flat = folded(&m, 0.0);
+            let (exact, projected, smallest) =
+                check_projection(&mut term, &ctx, m.pattern(), &flat);
+            assert_eq!(exact, projected, "{order:?}: flat, nothing to project");
+            assert!(smallest > -1e-12, "{order:?}: flat {smallest:e}");
         }
     }
 }

@@ -92,6 +92,7 @@ mod tests {
             let ctx = StepContext {
                 time: 0.0,
                 contact: None,
+                project: None,
             };
             let (eh, eg) = check_term(&mut term, &ctx, model.pattern(), &y, 1e-6);
             assert!(eh < 1e-8, "order {order}: Hessian {eh:e}");

@@ -102,6 +102,7 @@ mod tests {
                 let ctx = StepContext {
                     time: 1.0,
                     contact: None,
+                    project: None,
                 };
                 let (eh, eg) = check_term(&mut term, &ctx, model.pattern(), &y, 1e-7);
                 // Without pressure the Hessian is zero: errors relative to

@@ -42,18 +42,21 @@ impl StepTerm for MembraneTerm<'_> {
 
     fn add(
         &mut self,
-        _ctx: &StepContext,
+        ctx: &StepContext,
         y: &[f64],
         g: &mut [f64],
         h: Option<&mut [f64]>,
     ) -> TermValue {
         let model = self.model;
+        let hyperelastic = model.material().is_hyperelastic();
         // The assembly overwrites the forces and the Hessian: the first
-        // term, it writes straight into G and H.
-        let value = model.assemble(y, g, h);
+        // term, it writes straight into G and H. (The stress projection's
+        // tangent is no potential's Hessian: never projected.)
+        let project = ctx.project.filter(|_| hyperelastic);
+        let value = model.assemble_projected(y, g, h, project);
         TermValue {
             value,
-            potential: model.material().is_hyperelastic(),
+            potential: hyperelastic,
             scale: norm(g),
         }
     }
@@ -106,6 +109,7 @@ mod tests {
                 let ctx = StepContext {
                     time: 0.0,
                     contact: None,
+                    project: None,
                 };
                 let mut term = MembraneTerm::new(&model);
                 let (eh, eg) = check_term(&mut term, &ctx, model.pattern(), &y, 1e-7);
@@ -114,6 +118,49 @@ mod tests {
                 let mut g = vec![0.0; y.len()];
                 assert_eq!(term.add(&ctx, &y, &mut g, None).potential, potential);
             }
+        }
+    }
+
+    /// The projected Hessian (every element projected) is positive
+    /// semi-definite where the exact one is not — the patch compressed
+    /// along y, so that Saint-Venant–Kirchhoff's geometric stiffness is
+    /// negative there — and is the exact Hessian to the bit where every
+    /// element's Hessian is semi-definite (a biaxial stretch: `S`
+    /// positive definite, both parts of each element Hessian
+    /// semi-definite). Each element order.
+    #[test]
+    fn projected_membrane_hessian_is_semi_definite() {
+        use crate::integrator::terms::{check_projection, relative_smallest_eigenvalue};
+        let ctx = StepContext {
+            time: 0.0,
+            contact: None,
+            project: None,
+        };
+        for order in 1..=3 {
+            let model = patch_model(
+                order,
+                Box::new(SaintVenantKirchhoff::new(2.0e6, 0.3)),
+                vec![],
+            );
+            let n = model.initial_positions().len();
+            let mut term = MembraneTerm::new(&model);
+            let y = deformed(&model);
+            let (exact, projected, smallest) =
+                check_projection(&mut term, &ctx, model.pattern(), &y);
+            assert!(
+                relative_smallest_eigenvalue(&exact, n) < -1e-6,
+                "order {order}: the compressed patch's exact Hessian is indefinite"
+            );
+            assert!(smallest > -1e-12, "order {order}: projected {smallest:e}");
+            assert_ne!(exact, projected);
+            let stretched: Vec<f64> = model.initial_positions().iter().map(|x| 1.05 * x).collect();
+            let (exact, projected, smallest) =
+                check_projection(&mut term, &ctx, model.pattern(), &stretched);
+            assert_eq!(
+                exact, projected,
+                "order {order}: stretched, nothing to project"
+            );
+            assert!(smallest > -1e-12, "order {order}: stretched {smallest:e}");
         }
     }
 }

@@ -17,7 +17,10 @@ pub use membrane::MembraneTerm;
 pub use penalty::PenaltyTerm;
 
 #[cfg(test)]
-pub(crate) use check::{check_term, deformed, patch_builder, patch_model};
+pub(crate) use check::{
+    check_projection, check_term, deformed, patch_builder, patch_model,
+    relative_smallest_eigenvalue,
+};
 
 #[cfg(test)]
 mod check {
@@ -101,6 +104,47 @@ mod check {
             }
         }
         dense
+    }
+
+    /// The projection check of a step term at `y`: its Hessian with every
+    /// stencil projected ([`StepContext::project`] all set) must be
+    /// positive semi-definite (smallest eigenvalue at least `-1e-12` of
+    /// the largest magnitude: round-off of the sums), and its gradient
+    /// must be the exact one (a projection touches the Hessian only).
+    /// Returns the exact and the projected dense Hessians and the
+    /// projected one's smallest eigenvalue relative to its largest
+    /// magnitude.
+    pub(crate) fn check_projection(
+        term: &mut dyn StepTerm,
+        ctx: &StepContext,
+        pattern: &SparsePattern,
+        y: &[f64],
+    ) -> (Vec<f64>, Vec<f64>, f64) {
+        let n = y.len();
+        let exact = dense_hessian(term, ctx, pattern, y);
+        let flags = vec![true; n / 3];
+        let all = StepContext {
+            project: Some(&flags),
+            ..*ctx
+        };
+        let projected = dense_hessian(term, &all, pattern, y);
+        let (g, _) = gradient(term, ctx, y);
+        let (gp, _) = gradient(term, &all, y);
+        assert_eq!(g, gp, "a projection changes the Hessian only");
+        let smallest = relative_smallest_eigenvalue(&projected, n);
+        (exact, projected, smallest)
+    }
+
+    /// The smallest eigenvalue of a dense symmetric `n x n` matrix
+    /// relative to its largest magnitude.
+    pub(crate) fn relative_smallest_eigenvalue(h: &[f64], n: usize) -> f64 {
+        let a = faer::Mat::from_fn(n, n, |i, j| h[i * n + j]);
+        let eig = a
+            .self_adjoint_eigenvalues(faer::Side::Lower)
+            .expect("eigenvalues");
+        let largest = eig.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let smallest = eig.iter().copied().fold(f64::INFINITY, f64::min);
+        smallest / largest.max(f64::MIN_POSITIVE)
     }
 
     /// The gradient (residual contribution) of `term` at `y`.

@@ -11,7 +11,7 @@
 //! balances forces already counted).
 
 use super::super::potential::{Stencils, StepContext, StepTerm, TermValue};
-use crate::contact::ContactModel;
+use crate::contact::{ContactModel, PenaltyHessian};
 use crate::solver::SparsePattern;
 
 /// Penalty contact of stiffness `eta` (N/m).
@@ -56,7 +56,11 @@ impl StepTerm for PenaltyTerm<'_> {
                 ctx.time,
                 state,
                 g,
-                h.map(|h| (h, self.pattern)),
+                h.map(|values| PenaltyHessian {
+                    values,
+                    pattern: self.pattern,
+                    project: ctx.project,
+                }),
             ),
             None => 0.0,
         };
@@ -75,12 +79,8 @@ mod tests {
     use crate::scenario::Scenario;
     use std::path::Path;
 
-    /// A 10 cm patch pressed into a sphere (5 mm at its centre, clear of
-    /// it at its corners): the penalty's value, gradient and Hessian (with
-    /// the curvature term `g dn/dy`) against central differences.
-    #[test]
-    fn penalty_term_matches_finite_differences() {
-        let text = r#"
+    /// A 10 cm patch of 4 x 4 squares over a sphere.
+    const PATCH_IN_SPHERE: &str = r#"
 [mesh]
 shape = "rectangle"
 size = [0.1, 0.1]
@@ -100,21 +100,41 @@ penalty = 5.0e4
 [time]
 segments = [{ steps = 1, dt = 1e-3 }]
 "#;
+
+    /// The sphere of [`PATCH_IN_SPHERE`].
+    const SPHERE: &str = "shape = \"sphere\"\ncenter = [0.0, 0.0, -0.2]\nradius = 0.19";
+
+    /// The patch of [`PATCH_IN_SPHERE`] with `obstacle` (its keys) for the
+    /// sphere, and its nodes lifted into a paraboloid 1.5 cm below the
+    /// plane at its centre.
+    fn pressed_patch(obstacle: &str) -> (crate::scenario::Setup, Vec<f64>) {
+        let text = PATCH_IN_SPHERE.replace(SPHERE, obstacle);
         let path = Path::new("patch.toml");
-        let setup = Scenario::parse(text, path)
-            .and_then(|s| s.build(path, text))
+        let setup = Scenario::parse(&text, path)
+            .and_then(|s| s.build(path, &text))
             .expect("a valid scenario");
-        let model = &setup.model;
-        let contact = model.contact().expect("an obstacle");
-        let y: Vec<f64> = model
+        let y = setup
+            .model
             .initial_positions()
             .chunks(3)
             .flat_map(|x| [x[0], x[1], -0.015 + 2.0 * (x[0] * x[0] + x[1] * x[1])])
             .collect();
+        (setup, y)
+    }
+
+    /// A 10 cm patch pressed into a sphere (5 mm at its centre, clear of
+    /// it at its corners): the penalty's value, gradient and Hessian (with
+    /// the curvature term `g dn/dy`) against central differences.
+    #[test]
+    fn penalty_term_matches_finite_differences() {
+        let (setup, y) = pressed_patch(SPHERE);
+        let model = &setup.model;
+        let contact = model.contact().expect("an obstacle");
         let state = contact.initial_state(&y);
         let ctx = StepContext {
             time: 0.0,
             contact: Some(&state),
+            project: None,
         };
         let mut term = PenaltyTerm::new(contact, model.pattern(), 5.0e4);
         let mut g = vec![0.0; y.len()];
@@ -122,5 +142,37 @@ segments = [{ steps = 1, dt = 1e-3 }]
         let (eh, eg) = check_term(&mut term, &ctx, model.pattern(), &y, 1e-7);
         assert!(eh < 1e-6, "Hessian {eh:e}");
         assert!(eg < 1e-6, "gradient {eg:e}");
+    }
+
+    /// The projected Hessian of a patch pressed into a sphere is positive
+    /// semi-definite (each node's `eta (n n^T + g dn/dy)` has negative
+    /// eigenvalues on the tangent plane where `g < 0` on a convex surface)
+    /// and the exact one to the bit against a plane (`dn/dy = 0`).
+    #[test]
+    fn projected_penalty_hessian_is_semi_definite() {
+        use crate::integrator::terms::{check_projection, relative_smallest_eigenvalue};
+        let plane = "shape = \"plane\"\npoint = [0.0, 0.0, -0.01]\nnormal = [0.0, 0.0, 1.0]";
+        for (obstacle, indefinite) in [(SPHERE, true), (plane, false)] {
+            let (setup, y) = pressed_patch(obstacle);
+            let model = &setup.model;
+            let contact = model.contact().expect("an obstacle");
+            let n = y.len();
+            let state = contact.initial_state(&y);
+            let ctx = StepContext {
+                time: 0.0,
+                contact: Some(&state),
+                project: None,
+            };
+            let mut term = PenaltyTerm::new(contact, model.pattern(), 5.0e4);
+            let (exact, projected, smallest) =
+                check_projection(&mut term, &ctx, model.pattern(), &y);
+            assert!(smallest > -1e-12, "{obstacle}: projected {smallest:e}");
+            if indefinite {
+                assert!(relative_smallest_eigenvalue(&exact, n) < -1e-6);
+                assert_ne!(exact, projected);
+            } else {
+                assert_eq!(exact, projected);
+            }
+        }
     }
 }

@@ -431,6 +431,20 @@ impl BlockLu {
         )
     }
 
+    /// Whether every pivot block of the last symmetric factorisation
+    /// `A = L D L^T` is positive definite — then, by Sylvester's law of
+    /// inertia, so is `A` (the test of the projected Newton, which needs
+    /// a positive definite Hessian). Checked on `D^-1` (positive definite
+    /// exactly when `D` is) by its leading principal minors.
+    pub fn pivots_positive(&self) -> bool {
+        self.d_inv.iter().all(|d| {
+            let m2 = d[0] * d[4] - d[1] * d[3];
+            let m3 = d[0] * (d[4] * d[8] - d[5] * d[7]) - d[1] * (d[3] * d[8] - d[5] * d[6])
+                + d[2] * (d[3] * d[7] - d[4] * d[6]);
+            d[0] > 0.0 && m2 > 0.0 && m3 > 0.0
+        })
+    }
+
     /// Solves `A x = b` in place (`x`: `b` in, `x` out; `3 nodes` long)
     /// with the last factorisation.
     pub fn solve_in_place(&mut self, x: &mut [f64]) {
