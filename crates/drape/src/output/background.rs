@@ -23,7 +23,7 @@
 //! cloning it; leaving the scope waits for the thread, so nothing is
 //! still being written once the scope has returned.
 
-use std::sync::mpsc::{self, Receiver, SyncSender};
+use std::sync::mpsc::{self, Receiver, SyncSender, TryRecvError, TrySendError};
 use std::thread::{Scope, ScopedJoinHandle};
 use std::time::{Duration, Instant};
 
@@ -77,13 +77,11 @@ impl<'scope, J: Send + 'scope, E: Send + 'scope> Background<'scope, J, E> {
     /// After an error has been returned the thread is gone and later jobs
     /// are dropped without one.
     pub fn submit(&mut self, job: J) -> Result<(), E> {
-        let Some(sender) = &self.sender else {
-            return Ok(());
-        };
-        match sender.send(Message::Job(job)) {
-            Ok(()) => Ok(()),
+        if self.send(Message::Job(job)) {
+            Ok(())
+        } else {
             // The receiver is gone: the thread stopped on an error.
-            Err(_) => self.join().map(|_| ()),
+            self.join().map(|_| ())
         }
     }
 
@@ -93,15 +91,41 @@ impl<'scope, J: Send + 'scope, E: Send + 'scope> Background<'scope, J, E> {
     /// # Errors
     /// The error of a job that failed.
     pub fn flush(&mut self) -> Result<(), E> {
-        let Some(sender) = &self.sender else {
+        if self.sender.is_none() {
             return Ok(());
-        };
+        }
         let (reply, done) = mpsc::sync_channel(1);
-        if sender.send(Message::Flush(reply)).is_err() || done.recv().is_err() {
-            // The thread stopped before answering: on an error.
+        if !self.send(Message::Flush(reply)) {
             return self.join().map(|_| ());
         }
-        Ok(())
+        let mut pause = Pause::default();
+        loop {
+            match done.try_recv() {
+                Ok(()) => return Ok(()),
+                // The thread stopped before answering: on an error.
+                Err(TryRecvError::Disconnected) => return self.join().map(|_| ()),
+                Err(TryRecvError::Empty) => pause.wait(),
+            }
+        }
+    }
+
+    /// Hands `message` to the thread, waiting while the channel is full;
+    /// `false` when the thread is gone (or was joined).
+    fn send(&mut self, mut message: Message<J>) -> bool {
+        let Some(sender) = &self.sender else {
+            return false;
+        };
+        let mut pause = Pause::default();
+        loop {
+            match sender.try_send(message) {
+                Ok(()) => return true,
+                Err(TrySendError::Full(m)) => {
+                    message = m;
+                    pause.wait();
+                }
+                Err(TrySendError::Disconnected(_)) => return false,
+            }
+        }
     }
 
     /// Waits for every job submitted, stops the thread and returns the
@@ -110,6 +134,9 @@ impl<'scope, J: Send + 'scope, E: Send + 'scope> Background<'scope, J, E> {
     /// # Errors
     /// The error of a job that failed.
     pub fn finish(mut self) -> Result<Duration, E> {
+        // Every job done first (waiting as `flush` does, free to serve
+        // the thread pool), so that the join below does not wait on them.
+        self.flush()?;
         // Closing the channel ends the thread's loop once it is empty.
         self.sender = None;
         self.join()
@@ -126,6 +153,28 @@ impl<'scope, J: Send + 'scope, E: Send + 'scope> Background<'scope, J, E> {
             // Joined before, and whatever it reported was returned then.
             None => Ok(Duration::ZERO),
         }
+    }
+}
+
+/// How the calling thread waits for the writer: a rayon worker (the
+/// command line's main thread is one) runs the pool's pending jobs
+/// meanwhile — with one thread it is the pool's only worker, and a job
+/// that uses the pool (the frame's element results on a large mesh) would
+/// otherwise wait for it for ever while it waits for the job; any other
+/// thread sleeps briefly between looks (20 µs, then 0.5 ms).
+#[derive(Default)]
+struct Pause {
+    looks: u32,
+}
+
+impl Pause {
+    fn wait(&mut self) {
+        if rayon::yield_now() == Some(rayon::Yield::Executed) {
+            return;
+        }
+        self.looks += 1;
+        let micros = if self.looks < 50 { 20 } else { 500 };
+        std::thread::sleep(Duration::from_micros(micros));
     }
 }
 

@@ -1,0 +1,181 @@
+//! Issues 30 and 34: one thread or two, the same answer to the last bit,
+//! and no run that hangs. A run is the same computation whoever runs its
+//! parts — every sum in an order fixed by the work, not by the threads —
+//! so `history.csv` with `RAYON_NUM_THREADS=1` (how a sweep runs a case
+//! per core) is byte for byte the two-thread one; and a mesh large enough
+//! for rayon's loops (4,096 elements and more) with a one-worker pool
+//! finishes, writing its frames and checkpoints, and ends on SIGINT.
+
+mod issue_19_support;
+
+use issue_19_support::{DRAPE, scratch, send, summary, wait_for_history};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+/// The repository's root (two folders above this crate).
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// `drape run SCENARIO --out OUT --quiet` with `RAYON_NUM_THREADS =
+/// threads`, started.
+fn spawn_with_threads(scenario: &Path, out: &Path, threads: usize) -> Child {
+    Command::new(DRAPE)
+        .arg("run")
+        .arg(scenario)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .env("RAYON_NUM_THREADS", threads.to_string())
+        .stdin(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn drape")
+}
+
+/// Waits for `child`, killing it (and failing the test) after `limit`:
+/// a run that does not end has hung.
+fn wait_within(mut child: Child, limit: Duration, what: &str) -> ExitStatus {
+    let start = Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            return status;
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{what}: still running after {limit:?}: hung");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Runs `scenario` with one thread and with two (each within two
+/// minutes) and compares their histories byte for byte.
+fn same_history_on_one_and_two_threads(scenario: &Path, dir: &Path, name: &str) {
+    let mut histories = Vec::new();
+    for threads in [1, 2] {
+        let out = dir.join(format!("{name}-{threads}"));
+        let child = spawn_with_threads(scenario, &out, threads);
+        let status = wait_within(child, Duration::from_secs(120), name);
+        assert!(status.success(), "{name} on {threads} thread(s): {status}");
+        histories.push(std::fs::read(out.join("history.csv")).expect("history.csv"));
+    }
+    assert!(
+        histories[0] == histories[1],
+        "{name}: the one-thread history differs from the two-thread one"
+    );
+}
+
+/// `text` with its `[time]` segments replaced by `segments` and the
+/// settling keys (adaptive, dt_max, rest) dropped, and the mesh `path`
+/// made absolute against `base`.
+fn shortened(text: &str, segments: &str, base: &Path) -> String {
+    text.lines()
+        .filter(|l| {
+            !["adaptive", "dt_max", "rest"]
+                .iter()
+                .any(|k| l.starts_with(k))
+        })
+        .map(|l| {
+            if l.starts_with("segments") {
+                format!("segments = {segments}")
+            } else if let Some(rel) = l.strip_prefix("path = \"") {
+                let rel = rel.trim_end_matches('"');
+                format!("path = {:?}", base.join(rel))
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The pedestal example through the first contact (penalty, stress
+/// projection), and the drape tester with bending (the settle
+/// benchmark's scenario, the projected Newton) through its impact: the
+/// same history on one thread and on two.
+#[test]
+fn one_thread_and_two_give_the_same_history() {
+    let dir = scratch("threads");
+    let pedestal = std::fs::read_to_string(root().join("examples/fabric-on-pedestal.toml"))
+        .expect("the pedestal example");
+    let path = dir.join("pedestal.toml");
+    let segments = "[ { steps = 10, dt = 0.01 }, { steps = 60, dt = 1.0e-4 } ]";
+    std::fs::write(
+        &path,
+        shortened(&pedestal, segments, &root().join("examples")),
+    )
+    .unwrap();
+    same_history_on_one_and_two_threads(&path, &dir, "pedestal");
+
+    let scenarios = root().join("crates/drape-bench/scenarios");
+    let tester = std::fs::read_to_string(scenarios.join("settle-bending-t3.toml"))
+        .expect("the settle benchmark");
+    let path = dir.join("tester.toml");
+    let segments = "[ { steps = 10, dt = 0.01 }, { steps = 40, dt = 1.0e-3 } ]";
+    std::fs::write(&path, shortened(&tester, segments, &scenarios)).unwrap();
+    same_history_on_one_and_two_threads(&path, &dir, "drape tester with bending");
+}
+
+/// A 5,000-element sheet (above the 4,096 from which the loops run on
+/// rayon) falling, pinned at its edge, with frames and checkpoints every
+/// two steps `steps` steps long.
+fn big_sheet(dir: &Path, steps: usize) -> PathBuf {
+    let path = dir.join("sheet.toml");
+    std::fs::write(
+        &path,
+        format!(
+            r#"
+[mesh]
+shape = "rectangle"
+size = [0.2, 0.2]
+divisions = [50, 50]
+[material]
+youngs_modulus = 2.0e6
+poisson_ratio = 0.3
+density = 320.0
+thickness = 0.6e-3
+[[load]]
+kind = "gravity"
+acceleration = [0.0, 0.0, -9.8]
+[[fix]]
+boundary = true
+[time]
+segments = [{{ steps = {steps}, dt = 1e-3 }}]
+[output]
+every = 2
+checkpoint_every = 2
+"#
+        ),
+    )
+    .expect("write the scenario");
+    path
+}
+
+/// With one worker in rayon's pool — the main thread — the frame writer's
+/// parallel loop once waited for that worker while it waited for the
+/// frames (at the first frame or checkpoint): the run must end, with the
+/// two-thread history.
+#[test]
+fn a_big_mesh_on_one_thread_does_not_hang() {
+    let dir = scratch("one-thread-big");
+    let scenario = big_sheet(&dir, 8);
+    same_history_on_one_and_two_threads(&scenario, &dir, "5,000-element sheet");
+}
+
+/// SIGINT during a one-thread run of the big sheet ends it as on two
+/// threads: exit 130 (128 + SIGINT), a summary saying "interrupted".
+#[test]
+fn sigint_ends_a_one_thread_run_of_a_big_mesh() {
+    let dir = scratch("one-thread-sigint");
+    let scenario = big_sheet(&dir, 100_000);
+    let out = dir.join("out");
+    let child = spawn_with_threads(&scenario, &out, 1);
+    wait_for_history(&out, 4);
+    send(&child, "INT");
+    let status = wait_within(child, Duration::from_secs(60), "interrupted run");
+    assert_eq!(status.code(), Some(130), "{status}");
+    assert_eq!(summary(&out)["status"], "interrupted");
+}
