@@ -8,7 +8,7 @@
 
 mod issue_19_support;
 
-use issue_19_support::{DRAPE, scratch, send, summary, wait_for_history};
+use issue_19_support::{DRAPE, falling_sheet, scratch, send, summary, wait_for_history};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
@@ -121,37 +121,10 @@ fn one_thread_and_two_give_the_same_history() {
 
 /// A 5,000-element sheet (above the 4,096 from which the loops run on
 /// rayon) falling, pinned at its edge, with frames and checkpoints every
-/// two steps `steps` steps long.
+/// two steps, `steps` steps long.
 fn big_sheet(dir: &Path, steps: usize) -> PathBuf {
-    let path = dir.join("sheet.toml");
-    std::fs::write(
-        &path,
-        format!(
-            r#"
-[mesh]
-shape = "rectangle"
-size = [0.2, 0.2]
-divisions = [50, 50]
-[material]
-youngs_modulus = 2.0e6
-poisson_ratio = 0.3
-density = 320.0
-thickness = 0.6e-3
-[[load]]
-kind = "gravity"
-acceleration = [0.0, 0.0, -9.8]
-[[fix]]
-boundary = true
-[time]
-segments = [{{ steps = {steps}, dt = 1e-3 }}]
-[output]
-every = 2
-checkpoint_every = 2
-"#
-        ),
-    )
-    .expect("write the scenario");
-    path
+    let extra = "[[fix]]\nboundary = true\n[output]\nevery = 2\ncheckpoint_every = 2";
+    falling_sheet(dir, [50, 50], steps, extra)
 }
 
 /// With one worker in rayon's pool — the main thread — the frame writer's

@@ -20,6 +20,12 @@ pub fn scratch(name: &str) -> PathBuf {
 /// `dir/fall.toml`: a 4 x 4 plate falling for `steps` steps of 1 ms,
 /// followed by the TOML `extra`.
 pub fn falling_plate(dir: &Path, steps: usize, extra: &str) -> PathBuf {
+    falling_sheet(dir, [4, 4], steps, extra)
+}
+
+/// `dir/fall.toml`: a 10 cm sheet of `divisions` squares falling for
+/// `steps` steps of 1 ms, followed by the TOML `extra`.
+pub fn falling_sheet(dir: &Path, divisions: [usize; 2], steps: usize, extra: &str) -> PathBuf {
     let path = dir.join("fall.toml");
     std::fs::write(
         &path,
@@ -28,7 +34,7 @@ pub fn falling_plate(dir: &Path, steps: usize, extra: &str) -> PathBuf {
 [mesh]
 shape = "rectangle"
 size = [0.1, 0.1]
-divisions = [4, 4]
+divisions = {divisions:?}
 [material]
 youngs_modulus = 2.0e6
 poisson_ratio = 0.3
