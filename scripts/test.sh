@@ -48,6 +48,9 @@ fi
 
 echo "== Python: pip install ./crates/drape-py (into $venv)"
 # --no-build-isolation: the environment's maturin builds it (no download).
+# Its build hook runs the `maturin` program, found on PATH: the
+# environment's own, where this script installed it, comes first.
+export PATH="$venv/bin:$PATH"
 "$python" -m pip install --quiet --disable-pip-version-check --no-build-isolation ./crates/drape-py
 
 echo "== Python: package built and installed at $((SECONDS - start)) s"
