@@ -119,9 +119,13 @@ enum Command {
     Example {
         /// Example name (as listed); without it, list them.
         name: Option<String>,
-        /// Write the example to this file instead of printing it.
+        /// Write the example to this file instead of printing it (a new
+        /// file: an existing one is refused unless --force).
         #[arg(long)]
         write: Option<PathBuf>,
+        /// With --write, replace the file if it exists.
+        #[arg(long, requires = "write")]
+        force: bool,
     },
 }
 
@@ -188,7 +192,9 @@ fn main() -> ExitCode {
             },
         })
         .map_err(Failure::Input),
-        Command::Example { name, write } => example(name.as_deref(), write.as_deref()),
+        Command::Example { name, write, force } => {
+            example(name.as_deref(), write.as_deref(), force)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -718,7 +724,7 @@ fn plot(dir: &Path, output: Option<PathBuf>, size: Option<&str>) -> Result<(), F
     Ok(())
 }
 
-fn example(name: Option<&str>, write: Option<&Path>) -> Result<(), Failure> {
+fn example(name: Option<&str>, write: Option<&Path>, force: bool) -> Result<(), Failure> {
     let Some(name) = name else {
         println!("bundled examples (drape example NAME [--write FILE]):");
         for (n, text) in examples::ALL {
@@ -743,11 +749,41 @@ fn example(name: Option<&str>, write: Option<&Path>) -> Result<(), Failure> {
                 names.join(", ")
             ))
         })?;
-    match write {
-        Some(path) => std::fs::write(path, text)
-            .with_context(|| format!("cannot write {}", path.display()))
-            .map_err(Failure::Run)?,
-        None => print!("{text}"),
+    let Some(path) = write else {
+        print!("{text}");
+        return Ok(());
+    };
+    // A bad target is the user's input (exit 2): a directory, or a file
+    // that exists (a scenario of one's own) unless --force.
+    if path.is_dir() {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "cannot write example {name:?} to {}: it is a directory; give a file name",
+            path.display()
+        )));
     }
-    Ok(())
+    let mut options = std::fs::OpenOptions::new();
+    options.write(true);
+    if force {
+        options.create(true).truncate(true);
+    } else {
+        options.create_new(true);
+    }
+    let mut file = match options.open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+            return Err(Failure::Input(anyhow::anyhow!(
+                "cannot write example {name:?} to {}: the file exists (add --force to replace it)",
+                path.display()
+            )));
+        }
+        Err(e) => {
+            return Err(Failure::Input(
+                anyhow::Error::new(e).context(format!("cannot write {}", path.display())),
+            ));
+        }
+    };
+    use std::io::Write;
+    file.write_all(text.as_bytes())
+        .with_context(|| format!("cannot write {}", path.display()))
+        .map_err(Failure::Run)
 }

@@ -663,6 +663,49 @@ fn example_lists_prints_and_writes_the_bundled_examples() {
     );
 }
 
+/// `example --write` onto a file that exists (a scenario of one's own)
+/// refuses, exit 2, naming it and `--force`, and leaves it as it was;
+/// with `--force` it replaces it; onto a directory it refuses, exit 2
+/// (issue 34: it overwrote the file, and exited 1 on a directory).
+#[test]
+fn example_write_refuses_an_existing_file_or_a_directory() {
+    let tmp = TempDir::new("example-write");
+    let mine = tmp.path().join("mine.toml");
+    std::fs::write(&mine, "# my own scenario\n").unwrap();
+    let write = |target: &Path, force: bool| {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "example".as_ref(),
+            "hanging-cloth".as_ref(),
+            "--write".as_ref(),
+            target.as_os_str(),
+        ];
+        if force {
+            args.push("--force".as_ref());
+        }
+        drape(tmp.path(), &args)
+    };
+    let o = write(&mine, false);
+    let what = "drape example hanging-cloth --write mine.toml";
+    assert_no_panic(what, &o);
+    assert_eq!(o.status.code(), Some(2), "{}", describe(what, &o));
+    assert!(stderr(&o).contains("mine.toml") && stderr(&o).contains("--force"));
+    assert_eq!(
+        std::fs::read_to_string(&mine).unwrap(),
+        "# my own scenario\n"
+    );
+    let o = write(&mine, true);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(what, &o));
+    assert_eq!(
+        std::fs::read_to_string(&mine).unwrap(),
+        std::fs::read_to_string(examples_dir().join("hanging-cloth.toml")).unwrap()
+    );
+    let o = write(tmp.path(), false);
+    let what = "drape example hanging-cloth --write DIR";
+    assert_no_panic(what, &o);
+    assert_eq!(o.status.code(), Some(2), "{}", describe(what, &o));
+    assert!(stderr(&o).contains("directory"), "{}", describe(what, &o));
+}
+
 #[test]
 fn unknown_example_exits_2_and_lists_the_names() {
     let tmp = TempDir::new("example-unknown");

@@ -76,8 +76,10 @@ pub(crate) struct StepSystem<'a> {
     pub length: f64,
     /// Revisions of the active set left in this Newton solve.
     pub revisions: usize,
-    /// Strain energy at the last evaluation (J).
+    /// The membrane's strain energy at the last evaluation (J).
     pub strain_energy: f64,
+    /// The bending energy at the last evaluation (J; 0 without bending).
+    pub bending_energy: f64,
     /// Lagrange: the active nodes at the last evaluation.
     pub active: Vec<ActiveNode>,
     /// The nodes whose stencils' Hessians are projected to their
@@ -105,6 +107,7 @@ impl NewtonSystem for StepSystem<'_> {
         };
         let value = self.potential.evaluate(&ctx, y, g, h.as_deref_mut());
         self.strain_energy = self.potential.value("membrane").map_or(0.0, |v| v.value);
+        self.bending_energy = self.potential.value("bending").map_or(0.0, |v| v.value);
         model.apply_supports(g, h.as_deref_mut());
         let mut merit = None;
         if let (Some(contact), Some(state)) = (model.contact(), self.contact.as_deref())
@@ -175,6 +178,23 @@ impl NewtonSystem for StepSystem<'_> {
     }
 }
 
+/// The fabric's strain energy at a step's solution, by part (J): the
+/// membrane's and the bending's (0 without bending).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StrainEnergy {
+    /// The membrane's strain energy (J).
+    pub membrane: f64,
+    /// The bending energy (J).
+    pub bending: f64,
+}
+
+impl StrainEnergy {
+    /// Both parts (J): `history.csv`'s `strain_energy`.
+    pub fn total(&self) -> f64 {
+        self.membrane + self.bending
+    }
+}
+
 /// What a step adds to the membrane: its time, inertia and loads.
 pub(crate) struct StepTerms<'a> {
     /// `1 / (beta dt^2)`, or 0 in statics (no inertia).
@@ -227,7 +247,7 @@ fn step_potential<'a>(
 /// contact the active-set loop around it. On success `contact` holds the
 /// converged active set, multipliers and refreshed features; on error it is
 /// unchanged. Returns Newton's report (iterations summed over re-solutions)
-/// and the strain energy; `f_ext` holds the external forces at the
+/// and the strain energy by part; `f_ext` holds the external forces at the
 /// solution, or `old_ext` (the step's start's) again after an error, so
 /// that a step cut back starts from them.
 #[allow(clippy::too_many_arguments)]
@@ -242,7 +262,7 @@ pub(crate) fn solve_step(
     f_ext: &mut [f64],
     old_ext: &[f64],
     my: &mut [f64],
-) -> Result<(NewtonReport, f64), NewtonError> {
+) -> Result<(NewtonReport, StrainEnergy), NewtonError> {
     let saved = contact.clone();
     let mut total: Option<NewtonReport> = None;
     let mut rounds = 0;
@@ -281,13 +301,17 @@ pub(crate) fn solve_step(
             length,
             revisions: REVISIONS_IN_NEWTON,
             strain_energy: 0.0,
+            bending_energy: 0.0,
             active: Vec::new(),
             project: Vec::new(),
             projecting: false,
             can_project,
         };
         let result = newton::solve(&mut system, y, length, settings, ws);
-        let strain = system.strain_energy;
+        let strain = StrainEnergy {
+            membrane: system.strain_energy,
+            bending: system.bending_energy,
+        };
         let active = std::mem::take(&mut system.active);
         drop(system);
         let report = match result {

@@ -106,8 +106,11 @@ impl DynamicWorkspace {
 pub struct StepOutcome {
     /// Newton's report.
     pub newton: NewtonReport,
-    /// Strain energy at the end of the step (J).
+    /// Strain energy at the end of the step (J): the membrane's and the
+    /// bending's.
     pub strain_energy: f64,
+    /// The strain energy by part (J).
+    pub strain: super::StrainEnergy,
 }
 
 impl Newmark {
@@ -173,7 +176,7 @@ impl Newmark {
             dt: Some(dt),
             ..*settings
         };
-        let (report, strain_energy) = solve_step(
+        let (report, strain) = solve_step(
             model,
             terms,
             &mut state.contact,
@@ -201,7 +204,8 @@ impl Newmark {
         state.external_work += work;
         Ok(StepOutcome {
             newton: report,
-            strain_energy,
+            strain_energy: strain.total(),
+            strain,
         })
     }
 }

@@ -45,7 +45,7 @@ impl StaticStepper {
             pressure: model.pressure_at(lambda, Some(lambda)),
             time: lambda,
         };
-        let (report, strain_energy) = solve_step(
+        let (report, strain) = solve_step(
             model,
             terms,
             &mut state.contact,
@@ -66,7 +66,8 @@ impl StaticStepper {
         state.external_work += work;
         Ok(StepOutcome {
             newton: report,
-            strain_energy,
+            strain_energy: strain.total(),
+            strain,
         })
     }
 }

@@ -33,7 +33,7 @@ mod start;
 mod summary;
 mod warnings;
 use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
-use crate::integrator::{State, StaticStepper};
+use crate::integrator::{State, StaticStepper, StrainEnergy};
 use crate::model::Model;
 use crate::output::atomic::write_atomic;
 use crate::output::history::HistoryWriter;
@@ -188,7 +188,8 @@ struct StepRecord {
     step: usize,
     dt: f64,
     iterations: usize,
-    strain: f64,
+    /// The strain energy by part.
+    strain: StrainEnergy,
     cutbacks: usize,
     min_stretch: f64,
     contact: Option<ContactReport>,
@@ -239,6 +240,8 @@ pub fn history_columns(setup: &Setup) -> Vec<String> {
             "taut_fraction",
             "wrinkled_fraction",
             "slack_fraction",
+            "membrane_energy",
+            "bending_energy",
         ]
         .map(String::from),
     );
@@ -260,13 +263,14 @@ impl History<'_> {
             ),
             None => (0.0, 0.0, f64::NAN, 0.0),
         };
+        let strain = r.strain.total();
         let mut row = vec![
             r.step as f64,
             state.time,
             r.dt,
             r.iterations as f64,
             kinetic,
-            r.strain,
+            strain,
             active,
             force,
             min_gap,
@@ -277,16 +281,18 @@ impl History<'_> {
         row.extend_from_slice(&[
             state.external_work,
             contact_energy,
-            kinetic + r.strain + contact_energy - state.external_work,
+            kinetic + strain + contact_energy - state.external_work,
             r.min_stretch,
             r.cutbacks as f64,
             r.states[0],
             r.states[1],
             r.states[2],
+            r.strain.membrane,
+            r.strain.bending,
         ]);
         let path = self.writer.path().to_path_buf();
         self.writer.write_row(&row).map_err(io_err(&path))?;
-        self.last.set(self.setup, state, kinetic, r.strain);
+        self.last.set(self.setup, state, kinetic, strain);
         Ok(kinetic)
     }
 }
@@ -575,7 +581,7 @@ impl Stepper<'_, '_> {
                 step,
                 dt: h,
                 iterations: outcome.newton.iterations,
-                strain: outcome.strain_energy,
+                strain: outcome.strain,
                 cutbacks,
                 min_stretch: stretch,
                 contact: self.last_contact.clone(),

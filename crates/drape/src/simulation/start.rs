@@ -8,8 +8,8 @@ use super::schedule::{ScheduleMismatch, StepController};
 use super::summary::Figures;
 use super::{History, RunError, StepRecord, checkpoint_path, contact_report, history_columns};
 use super::{io_err, setup_failure};
-use crate::integrator::State;
 use crate::integrator::newmark::DynamicWorkspace;
+use crate::integrator::{State, StrainEnergy};
 use crate::output::history::HistoryWriter;
 use crate::output::pvd::{PvdWriter, frame_relative_path};
 use crate::scenario::{Analysis, InputFile, Setup};
@@ -242,7 +242,10 @@ pub(super) fn fresh<'a>(
         // Set by the first row, below.
         last: Figures::default(),
     };
-    let strain0 = model.strain_energy(&state.positions);
+    let strain0 = StrainEnergy {
+        membrane: model.strain_energy(&state.positions),
+        bending: model.bending().map_or(0.0, |b| b.energy(&state.positions)),
+    };
     let (stretch0, fractions0) = model.stretch_and_states(&state.positions);
     let contact0 = contact_report(model, &state);
     history.row(
@@ -260,7 +263,7 @@ pub(super) fn fresh<'a>(
     )?;
     let initial_frame = Snapshot::of(0, &state, contact0.as_ref());
     let counters = Counters {
-        last_strain: strain0,
+        last_strain: strain0.total(),
         ..Counters::default()
     };
     let controller = step_controller(setup, &counters)
