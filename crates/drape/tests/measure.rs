@@ -624,3 +624,46 @@ fn a_nan_position_is_an_error() {
     let e = measure::measure(&surface(&mesh, &y), &tester()).unwrap_err();
     assert!(matches!(e, MeasureError::NotFinite { node: 5, .. }));
 }
+
+/// Issue 35: a wider base cylinder 20 cm below the pedestal, listed before
+/// it, is not the pedestal — the specimen rests on the highest top — so
+/// the drape coefficient of a draped state is the one without the base
+/// (it was 0.466 against 0.050, the base's radius taken for the
+/// pedestal's). Two cylinders under the specimen with their tops at one
+/// height and different radii are ambiguous: an error that asks for the
+/// pedestal's radius.
+#[test]
+fn a_wider_base_below_the_pedestal_is_not_taken_for_it() {
+    let disc = generate::disc(R, 12, [0.0; 3], ElementOrder::Linear);
+    let y: Vec<[f64; 3]> = disc
+        .nodes
+        .iter()
+        .enumerate()
+        .map(|(i, &x)| drape_map(x, 6, |s| s, 1e-3, i as u64))
+        .collect();
+    let base = "[[obstacle]]\nshape = \"cylinder\"\ncenter = [0.0, 0.0, -0.25]\naxis = [0.0, 0.0, 1.0]\nradius = 0.2\nheight = 0.1";
+    let find = |obstacles: &str| {
+        DrapeTester::find(
+            Some(&scenario(DISC, obstacles, WEIGHT)),
+            &disc,
+            0.0,
+            Given::default(),
+        )
+    };
+    let alone = find(CYLINDER).unwrap();
+    let with_base = find(&format!("{base}\n{CYLINDER}")).unwrap();
+    assert_eq!(with_base.pedestal_source, "obstacle[1]");
+    assert_eq!(with_base.pedestal_radius, R_P);
+    let a = measure::measure(&surface(&disc, &y), &alone).unwrap();
+    let b = measure::measure(&surface(&disc, &y), &with_base).unwrap();
+    assert_eq!(a.drape_coefficient, b.drape_coefficient);
+    assert!(a.drape_coefficient > 0.1 && a.drape_coefficient < 0.9);
+    let beside = CYLINDER.replace("radius = 0.09", "radius = 0.1");
+    let e = find(&format!("{CYLINDER}\n{beside}"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("--pedestal-radius") && e.contains("obstacle[0]") && e.contains("obstacle[1]"),
+        "{e}"
+    );
+}

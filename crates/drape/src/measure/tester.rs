@@ -7,9 +7,13 @@
 //!   a scenario).
 //! - **Pedestal**: an `[[obstacle]]` of shape `cylinder` whose axis is
 //!   vertical (within [`VERTICAL_TOLERANCE_DEGREES`]) and passes under the
-//!   specimen (within the initial rim's reach of its centre; the nearest
-//!   if several do), moved by its velocity to the frame's time. Its
-//!   radius is `r_p`, its axis the centre of the measurement.
+//!   specimen (within the initial rim's reach of its centre), moved by its
+//!   velocity to the frame's time; of several, the one whose top face is
+//!   highest — the one the specimen comes to rest on (a wider base
+//!   cylinder below the pedestal is not it, whatever its place in the
+//!   list). Two under the specimen with their tops at one height and
+//!   different radii are ambiguous: an error that asks for the radius.
+//!   Its radius is `r_p`, its axis the centre of the measurement.
 //! - **Specimen**: the `radius` of a `[mesh] shape = "disc"` (which must
 //!   then lie in a horizontal plane); for `shape = "file"` the initial
 //!   mesh's rim, whose nodes must all lie within [`RIM_TOLERANCE`] of one
@@ -31,6 +35,10 @@ pub const VERTICAL_TOLERANCE_DEGREES: f64 = 1.0;
 /// largest, for a file mesh to be a disc: 2 % (the mid-edge nodes of a T6
 /// on the chords of a 60-gon lie 0.14 % inside the circle).
 pub const RIM_TOLERANCE: f64 = 0.02;
+
+/// Tops of two cylinders closer than this fraction of the specimen's
+/// reach are at one height.
+const TOP_TIE: f64 = 1e-9;
 
 /// Radii given instead of found (m).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -187,8 +195,9 @@ struct Pedestal {
     radius: f64,
 }
 
-/// The vertical cylinder whose axis passes nearest `rim_center`, within
-/// `reach`; or why there is none.
+/// The vertical cylinder under the specimen (its axis within `reach` of
+/// `rim_center`) whose top is highest (the nearest axis of equal tops and
+/// radii); or why there is none, or why the choice is ambiguous.
 fn find_pedestal(
     scenario: &Scenario,
     up: &Horizontal,
@@ -199,7 +208,7 @@ fn find_pedestal(
     let cos_tolerance = VERTICAL_TOLERANCE_DEGREES.to_radians().cos();
     let mut cylinders = 0;
     let mut vertical = 0;
-    let mut best: Option<(f64, Pedestal)> = None;
+    let mut best: Option<(f64, f64, Pedestal)> = None;
     for (index, obstacle) in scenario.obstacles.iter().enumerate() {
         let ObstacleSpec::Cylinder(c) = obstacle else {
             continue;
@@ -215,18 +224,42 @@ fn find_pedestal(
         vertical += 1;
         let moved = vec3::add(c.center, vec3::scale(c.velocity.unwrap_or([0.0; 3]), time));
         let distance = horizontal_distance(up, moved, rim_center);
-        if distance <= reach && best.as_ref().is_none_or(|(d, _)| distance < *d) {
-            let pedestal = Pedestal {
-                index,
-                axis_point: moved,
-                radius: c.radius,
-            };
-            best = Some((distance, pedestal));
+        if distance > reach {
+            continue;
         }
+        // The top face's height (`center` is the top face's centre).
+        let top = vec3::dot(moved, up.vertical());
+        let pedestal = Pedestal {
+            index,
+            axis_point: moved,
+            radius: c.radius,
+        };
+        best = match best {
+            None => Some((top, distance, pedestal)),
+            Some((t, d, p)) => {
+                if (top - t).abs() <= TOP_TIE * reach.max(f64::MIN_POSITIVE) {
+                    if pedestal.radius != p.radius {
+                        return Err(format!(
+                            "obstacle[{}] and obstacle[{index}] are both vertical cylinders under the specimen with their tops at one height and radii {} m and {} m: give the pedestal's radius (--pedestal-radius)",
+                            p.index, p.radius, pedestal.radius
+                        ));
+                    }
+                    if distance < d {
+                        Some((top, distance, pedestal))
+                    } else {
+                        Some((t, d, p))
+                    }
+                } else if top > t {
+                    Some((top, distance, pedestal))
+                } else {
+                    Some((t, d, p))
+                }
+            }
+        };
     }
     let k = up.vertical();
     match best {
-        Some((_, p)) => Ok(p),
+        Some((_, _, p)) => Ok(p),
         None if cylinders == 0 => {
             Err("the scenario has no [[obstacle]] of shape \"cylinder\"".into())
         }
