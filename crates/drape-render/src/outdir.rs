@@ -106,6 +106,17 @@ impl OutputDir {
                         "--time {t}: a run's time is not negative; its frames span t = {first} to {last} s"
                     )));
                 }
+                // Past the last frame (or before the first) the nearest is
+                // the end itself: at a time so large that every distance
+                // rounds to the same value, the loop below would keep the
+                // first frame.
+                let last = self.frames.len() - 1;
+                if t >= self.frames[last].time {
+                    return Ok(last);
+                }
+                if t <= self.frames[0].time {
+                    return Ok(0);
+                }
                 let mut best = 0;
                 for (i, f) in self.frames.iter().enumerate() {
                     if (f.time - t).abs() < (self.frames[best].time - t).abs() {
@@ -364,6 +375,10 @@ mod tests {
         assert_eq!(o.select(FrameSelect::Step(20)).unwrap(), 2);
         assert!(o.select(FrameSelect::Step(21)).is_err());
         assert_eq!(o.select(FrameSelect::Time(0.104)).unwrap(), 10);
+        // Far past the end, the last frame (issue 35: step 0 was taken,
+        // every distance rounding to 1e17).
+        let last = o.frames.len() - 1;
+        assert_eq!(o.select(FrameSelect::Time(1e17)).unwrap(), last);
         assert_eq!(o.select(FrameSelect::Last).unwrap(), 47);
     }
 }

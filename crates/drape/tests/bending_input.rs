@@ -35,6 +35,29 @@ segments = [{{ steps = 1, dt = 1.0e-3 }}]
 const RIGIDITY_LINE: usize = 10;
 const DIRECTION_LINE: usize = 11;
 
+/// A rigidity beyond any sheet's (1e300 N m passed `check`, and the run
+/// failed without naming the key; issue 35) is refused at its line, with
+/// its value and the unit, scalar or woven.
+#[test]
+fn an_absurd_rigidity_is_refused_with_its_value() {
+    for (value, key) in [
+        ("1e300", "material.bending_rigidity"),
+        ("2e10", "material.bending_rigidity"),
+        (
+            "{ warp = 1e300, weft = 1e-5 }",
+            "material.bending_rigidity.warp",
+        ),
+    ] {
+        let text = scenario(&format!("bending_rigidity = {value}"), "");
+        assert_error(
+            &text,
+            RIGIDITY_LINE,
+            key,
+            &["N m is above", "is it in N m?"],
+        );
+    }
+}
+
 #[test]
 fn a_bad_scalar_rigidity_is_named_with_its_value() {
     let key = "material.bending_rigidity";

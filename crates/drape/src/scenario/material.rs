@@ -152,6 +152,18 @@ fn warp_direction(c: &Checker, m: &MaterialSpec) -> Result<[f64; 3], ScenarioErr
     }
 }
 
+/// The largest `bending_rigidity` accepted (N m): a steel plate 40 cm
+/// thick (E = 2e11 Pa: `E t^3 / (12 (1 - nu^2))` = 1.2e9 N m), ten times
+/// over; a fabric's is 1e-6 to 1e-4.
+pub const MAX_BENDING_RIGIDITY: f64 = 1.0e10;
+
+/// Why a rigidity `b` above [`MAX_BENDING_RIGIDITY`] is refused.
+fn too_stiff(b: f64) -> String {
+    format!(
+        "{b:e} N m is above {MAX_BENDING_RIGIDITY:e} N m (ten times a steel plate 40 cm thick), beyond which the bending forces overflow; is it in N m?"
+    )
+}
+
 /// `[material] bending_rigidity` and `warp_direction` (README, "Scenario reference", `[material]`): `None`
 /// for no bending (the default, or a rigidity of 0).
 pub(super) fn build_bending(
@@ -167,10 +179,12 @@ pub(super) fn build_bending(
             toml::Value::Integer(i) => *i as f64,
             other => return Err(format!("must be a number (N m), not {other}")),
         };
-        if b.is_finite() && b >= 0.0 {
-            Ok(b)
-        } else {
+        if !(b.is_finite() && b >= 0.0) {
             Err(format!("must be a finite number >= 0 (N m), not {b}"))
+        } else if b > MAX_BENDING_RIGIDITY {
+            Err(too_stiff(b))
+        } else {
+            Ok(b)
         }
     };
     let direction = warp_direction(c, m)?;
@@ -233,7 +247,13 @@ pub(super) fn build_bending(
             })
         }
         Some(v) => {
-            let b = number(v).map_err(|_| {
+            let b = number(v).map_err(|why| {
+                if let Some(b) = v.as_float().or(v.as_integer().map(|i| i as f64))
+                    && b.is_finite()
+                    && b > MAX_BENDING_RIGIDITY
+                {
+                    return c.invalid(t, None, key, why);
+                }
                 c.invalid(
                     t,
                     None,
