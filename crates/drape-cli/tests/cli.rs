@@ -1090,6 +1090,15 @@ const BAD_INPUTS: &[BadInput] = &[
         line: Some(17),
     },
     BadInput {
+        file: "rest_as_a_number.toml",
+        fragments: &[
+            "`time.rest`",
+            "expected a table { speed = <m/s>, after = <s> }",
+            "rest = { speed = 1.0e-4",
+        ],
+        line: Some(18),
+    },
+    BadInput {
         file: "static_with_rest.toml",
         fragments: &["`time.rest`", "does not apply to a static analysis"],
         line: Some(20),

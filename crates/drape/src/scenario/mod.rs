@@ -382,14 +382,45 @@ pub struct TimeSpec {
 }
 
 /// `[time] rest = { speed, after }`: when a dynamic run is at rest.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RestSpec {
     /// Every node slower than this (m/s), > 0 and finite. Required.
     pub speed: f64,
     /// Steps ending before this time (s) do not count, >= 0. Default 0.
-    #[serde(default)]
     pub after: f64,
+}
+
+/// [`RestSpec`]'s table as written.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RestTable {
+    speed: f64,
+    #[serde(default)]
+    after: f64,
+}
+
+impl<'de> Deserialize<'de> for RestSpec {
+    /// The table, or an error that shows how to write it (`rest = 1e-4`
+    /// was refused as "expected struct RestSpec").
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Table;
+        impl<'de> serde::de::Visitor<'de> for Table {
+            type Value = RestSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(
+                    "a table { speed = <m/s>, after = <s> }, e.g. rest = { speed = 1.0e-4, after = 0.2 }",
+                )
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<RestSpec, A::Error> {
+                let t = RestTable::deserialize(serde::de::value::MapAccessDeserializer::new(map))?;
+                Ok(RestSpec {
+                    speed: t.speed,
+                    after: t.after,
+                })
+            }
+        }
+        d.deserialize_map(Table)
+    }
 }
 
 fn default_beta() -> f64 {
