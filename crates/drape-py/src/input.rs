@@ -8,7 +8,7 @@
 //! wherever it is saved — in `OUT/scenario.toml`, or in a sweep's case.
 
 use drape::scenario::{Scenario, ScenarioError, Setup};
-use pyo3::exceptions::PyTypeError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::path::{Path, PathBuf};
@@ -71,7 +71,7 @@ impl Source {
 /// TOML text of the scenario `dict`, its relative file paths joined to
 /// `folder`.
 pub fn scenario_text(dict: &Bound<'_, PyDict>, folder: &Path) -> PyResult<String> {
-    let mut table = table(dict, "")?;
+    let mut table = table(dict, "", 0)?;
     absolute_paths(&mut table, folder);
     toml::to_string(&table)
         .map_err(|e| PyTypeError::new_err(format!("the scenario cannot be written as TOML: {e}")))
@@ -98,7 +98,24 @@ fn absolute_paths(table: &mut toml::Table, folder: &Path) {
     }
 }
 
-fn table(dict: &Bound<'_, PyDict>, key: &str) -> PyResult<toml::Table> {
+/// The deepest nesting of tables and lists a scenario may have: drape's
+/// own go four deep (`obstacle[0].within.min`); deeper is a dict or list
+/// that contains itself, or no scenario.
+const MAX_DEPTH: usize = 32;
+
+/// A value nested deeper than [`MAX_DEPTH`] at `key`: a `ValueError`
+/// naming the key path (the conversion recursed without a limit and
+/// crashed the interpreter on a dict that contained itself).
+fn too_deep(key: &str) -> PyErr {
+    PyValueError::new_err(format!(
+        "scenario key `{key}`: nested more than {MAX_DEPTH} tables or lists deep (a dict or list that contains itself?)"
+    ))
+}
+
+fn table(dict: &Bound<'_, PyDict>, key: &str, depth: usize) -> PyResult<toml::Table> {
+    if depth > MAX_DEPTH {
+        return Err(too_deep(key));
+    }
     let mut out = toml::Table::new();
     for (k, v) in dict.iter() {
         let name = k.cast::<PyString>().map_err(|_| {
@@ -114,14 +131,17 @@ fn table(dict: &Bound<'_, PyDict>, key: &str) -> PyResult<toml::Table> {
         } else {
             format!("{key}.{name}")
         };
-        out.insert(name, value(&v, &path)?);
+        out.insert(name, value(&v, &path, depth + 1)?);
     }
     Ok(out)
 }
 
 /// The TOML value of `obj` (at `key`, for messages): bool, int, float,
 /// str, list or tuple, dict; NumPy arrays and scalars through `tolist()`.
-fn value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
+fn value(obj: &Bound<'_, PyAny>, key: &str, depth: usize) -> PyResult<toml::Value> {
+    if depth > MAX_DEPTH {
+        return Err(too_deep(key));
+    }
     // bool before int: Python's bool is an int.
     if let Ok(b) = obj.cast::<PyBool>() {
         return Ok(toml::Value::Boolean(b.is_true()));
@@ -141,7 +161,7 @@ fn value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
         return Ok(toml::Value::String(s.to_str()?.to_owned()));
     }
     if let Ok(d) = obj.cast::<PyDict>() {
-        return table(d, key).map(toml::Value::Table);
+        return table(d, key, depth).map(toml::Value::Table);
     }
     let items: Option<Vec<Bound<'_, PyAny>>> = if let Ok(l) = obj.cast::<PyList>() {
         Some(l.iter().collect())
@@ -154,12 +174,12 @@ fn value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
         return items
             .iter()
             .enumerate()
-            .map(|(i, item)| value(item, &format!("{key}[{i}]")))
+            .map(|(i, item)| value(item, &format!("{key}[{i}]"), depth + 1))
             .collect::<PyResult<Vec<_>>>()
             .map(toml::Value::Array);
     }
     if obj.hasattr("tolist")? {
-        return value(&obj.call_method0("tolist")?, key);
+        return value(&obj.call_method0("tolist")?, key, depth + 1);
     }
     Err(PyTypeError::new_err(format!(
         "scenario key `{key}`: a value of type {} has no TOML value (use bool, int, float, str, list or dict{})",

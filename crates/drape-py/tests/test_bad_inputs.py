@@ -36,6 +36,10 @@ BAD = {
         '[parameters]\n"material.density" = [300.0, "heavy"]\n',
         "case 0001: `material.density`: invalid type: string \"heavy\", expected f64",
     ),
+    "a key given twice": (
+        '[parameters]\n"material.density" = [300.0, 320.0]\n[parameters.material]\ndensity = [340.0]\n',
+        "parameter `material.density` is given twice",
+    ),
     "zip lists of unequal length": (
         'mode = "zip"\n[parameters]\n"material.density" = [300.0, 320.0, 340.0]\n"contact.penalty" = [1.0e4, 2.0e4]\n',
         'mode = "zip" takes lists of one length: `material.density` has 3, `contact.penalty` has 2',

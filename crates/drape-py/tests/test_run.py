@@ -148,6 +148,29 @@ def test_what_is_not_a_scenario_is_refused(tmp_path):
         drape.check(tmp_path / "missing.toml")
 
 
+def test_a_dict_that_contains_itself_is_a_value_error():
+    """Issue 34: a dict that contains itself, or nests 10,000 deep, is a
+    ValueError naming the key path, where the conversion to TOML recursed
+    without a limit and killed the interpreter (SIGSEGV)."""
+    doc = pedestal()
+    doc["material"]["self"] = doc["material"]
+    with pytest.raises(ValueError, match=r"scenario key `material\.self\.self.*`: nested more than 32"):
+        drape.check(doc)
+    deep = pedestal()
+    inner = deep["mesh"]
+    for _ in range(10_000):
+        inner["x"] = {}
+        inner = inner["x"]
+    with pytest.raises(ValueError, match=r"scenario key `mesh\.x\.x.*`: nested more than 32 tables or lists deep"):
+        drape.check(deep)
+    listed = pedestal()
+    loop = []
+    loop.append(loop)
+    listed["material"]["density"] = loop
+    with pytest.raises(ValueError, match=r"scenario key `material\.density\[0\]\[0\]"):
+        drape.check(listed)
+
+
 def test_a_failed_run_raises_run_error_with_what_it_wrote(tmp_path):
     # One Newton iteration and no cut-back: the first contact step fails.
     doc = short_pedestal()

@@ -123,7 +123,7 @@ def load_plan(path: Union[str, os.PathLike]) -> Plan:
         raise SweepError(
             f'{path}: the [parameters] table is missing or empty: it lists the values of dotted keys, e.g. "material.youngs_modulus" = [1.0e6, 2.0e6]'
         )
-    parameters = _flatten(table)
+    parameters = _flatten(table, path=path)
     keys = tuple(parameters)
     for key, values in parameters.items():
         if not isinstance(values, list) or not values:
@@ -172,17 +172,21 @@ def _read_toml(path: Path, what: str) -> Dict[str, Any]:
         raise SweepError(f"{what} is not a valid TOML file: {e}") from None
 
 
-def _flatten(table: Dict[str, Any], prefix: str = "") -> Dict[str, Any]:
+def _flatten(table: Dict[str, Any], prefix: str = "", path: Path = Path("sweep")) -> Dict[str, Any]:
     """``{"material": {"density": [..]}}`` (unquoted dotted keys) and
     ``{"material.density": [..]}`` (quoted) alike become
-    ``{"material.density": [..]}``."""
+    ``{"material.density": [..]}``; one key given both ways is refused,
+    naming it (one of the two was silently dropped)."""
     out: Dict[str, Any] = {}
     for key, value in table.items():
         full = f"{prefix}.{key}" if prefix else key
-        if isinstance(value, dict):
-            out.update(_flatten(value, full))
-        else:
-            out[full] = value
+        inner = _flatten(value, full, path) if isinstance(value, dict) else {full: value}
+        for k, v in inner.items():
+            if k in out:
+                raise SweepError(
+                    f"{path}: parameter `{k}` is given twice (as a quoted dotted key and inside a table): give it once"
+                )
+            out[k] = v
     return out
 
 
