@@ -1301,6 +1301,25 @@ const BAD_INPUTS: &[BadInput] = &[
         line: Some(21),
     },
     BadInput {
+        file: "friction_negative.toml",
+        fragments: &["`contact.friction`", "finite number >= 0", "-0.3"],
+        line: Some(26),
+    },
+    BadInput {
+        file: "stick_speed_zero.toml",
+        fragments: &["`contact.stick_speed`", "positive", "0"],
+        line: Some(27),
+    },
+    BadInput {
+        file: "friction_lagrange.toml",
+        fragments: &[
+            "`contact.friction`",
+            "needs method = \"penalty\"",
+            "not implemented yet",
+        ],
+        line: Some(25),
+    },
+    BadInput {
         file: "negative_penalty.toml",
         fragments: &["`contact.penalty`", "positive", "-10000"],
         line: Some(25),

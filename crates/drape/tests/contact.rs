@@ -78,6 +78,8 @@ fn penalty_terms(
             velocity: body.velocity,
         }],
         method: ContactMethod::Penalty { stiffness: eta },
+        friction: 0.0,
+        stick_speed: drape::contact::DEFAULT_STICK_SPEED,
     };
     let pattern = SparsePattern::new(1, std::iter::once(&[0usize][..]));
     let mut g = vec![0.0; 3];
@@ -192,6 +194,8 @@ fn penalty_force_and_hessian_match_finite_differences_for_every_obstacle() {
                     velocity: body.velocity,
                 }],
                 method: ContactMethod::Penalty { stiffness: eta },
+                friction: 0.0,
+                stick_speed: drape::contact::DEFAULT_STICK_SPEED,
             };
             let hints = model.initial_state(&y0);
             let moved = [0, 1, 2].map(|i| y0[i] + 0.3 * body.velocity[i]);

@@ -112,7 +112,20 @@ pub struct ContactModel {
     pub bodies: Vec<RigidBody>,
     /// Enforcement.
     pub method: ContactMethod,
+    /// Coulomb's friction coefficient `mu` against every obstacle (0:
+    /// frictionless). Penalty contact only ([`crate::integrator::terms::FrictionTerm`]).
+    pub friction: f64,
+    /// The slip speed `eps_v` (m/s) below which friction is a stiff
+    /// viscous resistance rather than Coulomb's constant force (the
+    /// smoothing of Li et al. 2020): the creep speed of a fabric that
+    /// sticks.
+    pub stick_speed: f64,
 }
+
+/// The default `[contact] stick_speed` (m/s): creep of at most 1 mm in
+/// a second where friction holds (Li et al. 2020 use 1e-3 of the scene's
+/// size a second).
+pub const DEFAULT_STICK_SPEED: f64 = 1e-3;
 
 /// Contact state carried from step to step.
 #[derive(Debug, Clone, PartialEq)]
@@ -335,6 +348,8 @@ mod tests {
                 },
             ],
             method: ContactMethod::Penalty { stiffness: 1e4 },
+            friction: 0.0,
+            stick_speed: DEFAULT_STICK_SPEED,
         };
         // Points on a lattice through the boxes' faces, edges and corners,
         // each also nudged by +-1e-12 m (inside the touching band) and
@@ -395,6 +410,8 @@ mod tests {
                 },
             ],
             method: ContactMethod::Lagrange,
+            friction: 0.0,
+            stick_speed: DEFAULT_STICK_SPEED,
         };
         let y = [
             0.0, 0.0, 0.01, // 0: above both: free

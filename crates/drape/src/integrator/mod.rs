@@ -18,7 +18,7 @@ use crate::solver::newton::{
     self, Evaluation, NewtonError, NewtonReport, NewtonSettings, NewtonSystem, NewtonWorkspace,
 };
 use potential::{IncrementalPotential, StepContext, StepTerm};
-use terms::{BendingTerm, InertiaTerm, LoadTerm, MembraneTerm, PenaltyTerm};
+use terms::{BendingTerm, FrictionTerm, InertiaTerm, LoadTerm, MembraneTerm, PenaltyTerm};
 
 /// The state carried from step to step.
 #[derive(Debug, Clone, PartialEq)]
@@ -38,6 +38,10 @@ pub struct State {
     /// Work done by the external loads since the start (J), by the
     /// trapezoidal rule on each step: `1/2 (F_n + F_{n+1}) . (Y_{n+1} - Y_n)`.
     pub external_work: f64,
+    /// Energy friction has dissipated since the start (J): the work of the
+    /// friction forces against the sliding, summed step by step; never
+    /// decreasing.
+    pub friction_dissipation: f64,
     /// Contact features, active set and multipliers (with obstacles).
     pub contact: Option<ContactState>,
 }
@@ -54,6 +58,7 @@ impl State {
             accelerations: vec![0.0; n],
             persistence: 1.0,
             external_work: 0.0,
+            friction_dissipation: 0.0,
             contact,
         }
     }
@@ -179,13 +184,16 @@ impl NewtonSystem for StepSystem<'_> {
 }
 
 /// The fabric's strain energy at a step's solution, by part (J): the
-/// membrane's and the bending's (0 without bending).
+/// membrane's and the bending's (0 without bending); and what friction
+/// dissipated over the step.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StrainEnergy {
     /// The membrane's strain energy (J).
     pub membrane: f64,
     /// The bending energy (J).
     pub bending: f64,
+    /// The energy friction dissipated over the step (J; 0 without).
+    pub dissipated: f64,
 }
 
 impl StrainEnergy {
@@ -207,14 +215,20 @@ pub(crate) struct StepTerms<'a> {
     pub pressure: f64,
     /// Time at the end of the step (obstacle positions).
     pub time: f64,
+    /// The positions at the step's start and its size (s), for the terms
+    /// that lag over the step (friction); `None` in statics.
+    pub start: Option<(&'a [f64], f64)>,
 }
 
 /// The terms of a step's incremental potential, in their order: membrane,
 /// bending (with a bending stiffness), loads, inertia (dynamic), penalty contact (with obstacles and
-/// penalties). `f_ext` receives the external forces, `my` is scratch.
+/// penalties), friction (penalty contact with a friction coefficient, in a
+/// dynamic step: lagged from `state`, the step's start's contact state).
+/// `f_ext` receives the external forces, `my` is scratch.
 fn step_potential<'a>(
     model: &'a Model,
     terms: &StepTerms<'a>,
+    state: Option<&ContactState>,
     f_ext: &'a mut [f64],
     my: &'a mut [f64],
 ) -> IncrementalPotential<'a> {
@@ -239,6 +253,20 @@ fn step_potential<'a>(
             model.pattern(),
             stiffness,
         )));
+        // Friction lags the normal force and the tangent plane of the
+        // step's start (the contact state is the step's start's too).
+        if contact.friction > 0.0
+            && let (Some((start, dt)), Some(state)) = (terms.start, state)
+        {
+            let lag = (start, terms.time - dt, dt);
+            list.push(Box::new(FrictionTerm::new(
+                contact,
+                model.pattern(),
+                stiffness,
+                lag,
+                state,
+            )));
+        }
     }
     IncrementalPotential::new(list)
 }
@@ -284,7 +312,7 @@ pub(crate) fn solve_step(
             .contact()
             .is_none_or(|c| c.method != ContactMethod::Lagrange);
     let error = loop {
-        let mut potential = step_potential(model, &terms, &mut *f_ext, &mut *my);
+        let mut potential = step_potential(model, &terms, saved.as_ref(), &mut *f_ext, &mut *my);
         if rounds == 0 {
             let ctx = StepContext {
                 time: terms.time,
@@ -311,6 +339,7 @@ pub(crate) fn solve_step(
         let strain = StrainEnergy {
             membrane: system.strain_energy,
             bending: system.bending_energy,
+            dissipated: system.potential.dissipation(),
         };
         let active = std::mem::take(&mut system.active);
         drop(system);

@@ -171,6 +171,7 @@ impl Newmark {
             dead: &ws.dead,
             pressure: model.pressure_at(t1, None),
             time: t1,
+            start: Some((&state.positions, dt)),
         };
         let settings = &NewtonSettings {
             dt: Some(dt),
@@ -202,6 +203,7 @@ impl Newmark {
         std::mem::swap(&mut state.positions, &mut ws.y);
         state.time = t1;
         state.external_work += work;
+        state.friction_dissipation += strain.dissipated;
         Ok(StepOutcome {
             newton: report,
             strain_energy: strain.total(),

@@ -124,6 +124,12 @@ pub trait StepTerm {
         h: Option<&mut [f64]>,
     ) -> TermValue;
 
+    /// The energy the term dissipated over the step, at its last
+    /// evaluation (J): friction's work against the slip. Default 0.
+    fn dissipation(&self) -> f64 {
+        0.0
+    }
+
     /// The largest fraction `alpha` in `(0, 1]` of the increment `dy` that
     /// the term allows from `y` (a barrier's collision-free step, Li et
     /// al. 2020). Default 1: no limit.
@@ -211,6 +217,12 @@ impl<'a> IncrementalPotential<'a> {
             .zip(&self.values)
             .find(|(t, _)| t.name() == name)
             .map(|(_, v)| *v)
+    }
+
+    /// The energy the terms dissipated over the step at the last
+    /// evaluation (J).
+    pub fn dissipation(&self) -> f64 {
+        self.terms.iter().map(|t| t.dissipation()).sum()
     }
 
     /// The smallest [`StepTerm::max_step`] of the terms.

@@ -44,6 +44,7 @@ impl StaticStepper {
             dead: &ws.dead,
             pressure: model.pressure_at(lambda, Some(lambda)),
             time: lambda,
+            start: None,
         };
         let (report, strain) = solve_step(
             model,

@@ -38,12 +38,29 @@ pub enum ContactSpec {
 pub struct PenaltySpec {
     /// Penalty stiffness `eta` (N/m per node), > 0. Required.
     pub penalty: f64,
+    /// Coulomb's friction coefficient `mu` against every obstacle, >= 0
+    /// and finite. Default 0 (frictionless).
+    #[serde(default)]
+    pub friction: f64,
+    /// The slip speed (m/s, > 0) below which friction is a stiff viscous
+    /// resistance: the creep of a fabric that sticks. Default 1e-3.
+    #[serde(default = "default_stick_speed")]
+    pub stick_speed: f64,
 }
 
-/// `method = "lagrange"`: `g = 0` exactly on an active set; no keys of its own.
+fn default_stick_speed() -> f64 {
+    crate::contact::DEFAULT_STICK_SPEED
+}
+
+/// `method = "lagrange"`: `g = 0` exactly on an active set.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct LagrangeSpec {}
+pub struct LagrangeSpec {
+    /// Coulomb's friction coefficient: only 0 (the default) so far with
+    /// multipliers.
+    #[serde(default)]
+    pub friction: f64,
+}
 
 impl ContactSpec {
     /// The keys of the contact table but `method`, into the struct of `method`.
@@ -84,16 +101,55 @@ pub(super) fn build_contact(
         &s.contact,
         "when there are obstacles (a [contact] table with method = \"penalty\" or \"lagrange\")",
     )?;
-    let method = match spec {
-        ContactSpec::Penalty(p) => ContactMethod::Penalty {
-            stiffness: c.positive("contact", None, "penalty", p.penalty)?,
-        },
-        ContactSpec::Lagrange(_) => ContactMethod::Lagrange,
+    let t = "contact";
+    let friction_of = |mu: f64| {
+        if mu.is_finite() && mu >= 0.0 {
+            Ok(mu)
+        } else {
+            Err(c.invalid(
+                t,
+                None,
+                "friction",
+                format!("must be a finite number >= 0 (Coulomb's coefficient), not {mu}"),
+            ))
+        }
+    };
+    let (method, friction, stick_speed) = match spec {
+        ContactSpec::Penalty(p) => (
+            ContactMethod::Penalty {
+                stiffness: c.positive(t, None, "penalty", p.penalty)?,
+            },
+            friction_of(p.friction)?,
+            c.positive(t, None, "stick_speed", p.stick_speed)?,
+        ),
+        ContactSpec::Lagrange(l) => {
+            if friction_of(l.friction)? != 0.0 {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    "friction",
+                    format!(
+                        "= {} needs method = \"penalty\" for now: friction with multipliers is not implemented yet",
+                        l.friction
+                    ),
+                ));
+            }
+            (
+                ContactMethod::Lagrange,
+                0.0,
+                crate::contact::DEFAULT_STICK_SPEED,
+            )
+        }
     };
     let bodies = (s.obstacles.iter().enumerate())
         .map(|(i, o)| build_body(c, i, o, base, inputs))
         .collect::<Result<_, _>>()?;
-    Ok(Some(ContactModel { bodies, method }))
+    Ok(Some(ContactModel {
+        bodies,
+        method,
+        friction,
+        stick_speed,
+    }))
 }
 
 /// Rejects a fabric that starts inside an obstacle by more than 1e-3 of

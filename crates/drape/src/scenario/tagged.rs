@@ -164,7 +164,11 @@ mod tests {
         assert_eq!(s.obstacles, vec![ObstacleSpec::Box(expected)]);
         assert_eq!(
             s.contact,
-            Some(ContactSpec::Penalty(PenaltySpec { penalty: 5.0 }))
+            Some(ContactSpec::Penalty(PenaltySpec {
+                penalty: 5.0,
+                friction: 0.0,
+                stick_speed: crate::contact::DEFAULT_STICK_SPEED,
+            }))
         );
     }
 

@@ -1,7 +1,7 @@
 //! Checkpoints: the full state of a run in a versioned binary file, to
 //! resume from (`drape run --resume DIR`).
 //!
-//! Format (little-endian), version 4:
+//! Format (little-endian), version 5:
 //!
 //! ```text
 //! magic "DRAPECKP" · version u32 · scenario hash u64
@@ -12,7 +12,7 @@
 //!           steps since the last frame u64, step of the last frame u64, wall seconds f64,
 //!           segment u64, step size f64, still steps u64
 //! state: time f64, external work f64, acceleration persistence f64,
-//!        positions, velocities, accelerations,
+//!        friction dissipation f64, positions, velocities, accelerations,
 //!        external forces of the last step (dofs f64 each)
 //! contact u8 (0/1), then hints (nodes x bodies u32), held (nodes x 2 u32, u32::MAX: none),
 //!        multipliers (nodes f64)
@@ -25,6 +25,7 @@
 //! changed, naming it. A path is kept as the bytes of the operating
 //! system's string (Unix), so that any path survives.
 //!
+//! Version 4 (drape before friction) is read with no friction dissipated.
 //! Version 3 (drape before the input files were recorded) is read too,
 //! without them: it resumes as before, without checking the files.
 //! Version 1 (drape before the predictor carried the persistence) resumes
@@ -49,7 +50,7 @@ use crate::simulation::schedule::REST_STEPS;
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"DRAPECKP";
-const VERSION: u32 = 4;
+const VERSION: u32 = 5;
 
 /// Longest key of an input file (bytes).
 const MAX_KEY_BYTES: usize = 256;
@@ -185,7 +186,7 @@ struct Expected<'a> {
 }
 
 impl Checkpoint {
-    /// Serialises the checkpoint (as version 4; `inputs: None` as an empty
+    /// Serialises the checkpoint (as version 5; `inputs: None` as an empty
     /// list).
     pub fn to_bytes(&self) -> Vec<u8> {
         let s = &self.state;
@@ -226,6 +227,7 @@ impl Checkpoint {
         b.extend_from_slice(&s.time.to_le_bytes());
         b.extend_from_slice(&s.external_work.to_le_bytes());
         b.extend_from_slice(&s.persistence.to_le_bytes());
+        b.extend_from_slice(&s.friction_dissipation.to_le_bytes());
         for v in [
             &s.positions,
             &s.velocities,
@@ -375,6 +377,12 @@ impl Checkpoint {
         } else {
             1.0
         };
+        // (Version 5: friction; none before.)
+        let friction_dissipation = if version >= 5 {
+            r.f64("friction dissipation")?
+        } else {
+            0.0
+        };
         let positions = r.f64s(dofs, "positions")?;
         let velocities = r.f64s(dofs, "velocities")?;
         let accelerations = r.f64s(dofs, "accelerations")?;
@@ -414,6 +422,7 @@ impl Checkpoint {
                 accelerations,
                 persistence,
                 external_work,
+                friction_dissipation,
                 contact,
             },
             external_forces,
@@ -477,6 +486,13 @@ impl Checkpoint {
         ] {
             refuse(value.is_finite(), format!("{name} {value} is not finite"))?;
         }
+        refuse(
+            s.friction_dissipation.is_finite() && s.friction_dissipation >= 0.0,
+            format!(
+                "friction dissipation {} is not a finite energy >= 0",
+                s.friction_dissipation
+            ),
+        )?;
         refuse(
             c.wall_seconds.is_finite() && c.wall_seconds >= 0.0,
             format!("wall seconds {} is not a finite time >= 0", c.wall_seconds),
@@ -894,6 +910,7 @@ mod tests {
                 accelerations: v(3.0),
                 persistence: 0.375,
                 external_work: 0.01,
+                friction_dissipation: 0.002,
                 contact: contact.then(|| ContactState {
                     hints: vec![0, u32::MAX, 2, 1],
                     active: vec![Some((0, 2)), None],
@@ -963,9 +980,10 @@ mod tests {
         body
     }
 
-    /// The same file as version 3 wrote it (without the input files),
-    /// version 2 (without segment, step size and still steps too) or
-    /// version 1 (without the persistence too).
+    /// The same file as version 4 wrote it (without the friction
+    /// dissipation), version 3 (without the input files too), version 2
+    /// (without segment, step size and still steps too) or version 1
+    /// (without the persistence too).
     fn as_version(bytes: &[u8], version: u32) -> Vec<u8> {
         // Version 3: magic, version, scenario hash, then the sizes.
         let inputs = 8 + 4 + 8;
@@ -978,6 +996,16 @@ mod tests {
             }
             at += 8;
         }
+        // Version 4: the sizes (3 u64), 4 counters u64, 5 counter fields,
+        // segment, step size, still steps, time, external work and the
+        // persistence, then (version 5) the friction dissipation.
+        let friction = at + 8 * 3 + 8 * 4 + 8 * 5 + 8 * 3 + 8 * 2 + 8;
+        let mut v4 = bytes[..friction].to_vec();
+        v4.extend_from_slice(&bytes[friction + 8..]);
+        if version == 4 {
+            return seal(v4[..v4.len() - 8].to_vec(), 4);
+        }
+        let bytes = &v4[..];
         let mut v3 = bytes[..inputs].to_vec();
         v3.extend_from_slice(&bytes[at..]);
         let bytes = &v3[..];
@@ -1000,7 +1028,8 @@ mod tests {
         seal(old, version)
     }
 
-    /// Version 3 resumes without input files (unchecked); versions 1 and 2
+    /// Version 4 resumes with no friction dissipated; version 3 without
+    /// input files (unchecked); versions 1 and 2
     /// with 0 for the adaptive steps' segment and step size and the rest
     /// criterion's still steps (a fixed schedule's values), version 1 with
     /// the persistence 1 (the predictor it was written with).
@@ -1009,6 +1038,10 @@ mod tests {
         let c = sample(true);
         let bytes = c.to_bytes();
         let mut expected = c.clone();
+        // Version 4: no friction, none dissipated.
+        expected.state.friction_dissipation = 0.0;
+        let v4 = Checkpoint::from_bytes(&as_version(&bytes, 4), 6, 2, 0xdead_beef).unwrap();
+        assert_eq!(v4, expected);
         expected.inputs = None;
         let v3 = as_version(&bytes, 3);
         assert_eq!(Checkpoint::recorded_inputs(&v3).unwrap(), None);
@@ -1038,6 +1071,10 @@ mod tests {
             assert!(e.to_string().contains(says), "{says}: {e}");
         };
         refused(&|c| c.state.persistence = 1.5, "persistence 1.5");
+        refused(
+            &|c| c.state.friction_dissipation = -1.0,
+            "friction dissipation -1 is not a finite energy",
+        );
         refused(&|c| c.counters.step_size = f64::NAN, "step size NaN");
         refused(&|c| c.counters.step_size = -1e-3, "step size -0.001");
         refused(&|c| c.counters.step_size = f64::INFINITY, "step size inf");
@@ -1126,11 +1163,11 @@ mod tests {
         // A later version is refused by name.
         let mut later = sample(true).to_bytes();
         later.truncate(later.len() - 8);
-        let later = seal(later, 5);
+        let later = seal(later, 6);
         let e = Checkpoint::from_bytes(&later, 6, 2, 0xdead_beef).unwrap_err();
         assert!(
             e.to_string()
-                .contains("version 5, this drape reads versions 1 to 4"),
+                .contains("version 6, this drape reads versions 1 to 5"),
             "{e}"
         );
     }
@@ -1171,13 +1208,15 @@ mod tests {
         // A sealed file cut in the positions.
         let header = 8 + 4 + 8 + 8 + (4 + 9 + 4 + 25 + 8) + 24;
         let counters = 8 * 12;
-        let cut = header + counters + 24 + 8 * 3;
+        // Time, external work, persistence and friction dissipation.
+        let state = 8 * 4;
+        let cut = header + counters + state + 8 * 3;
         says(
             &seal(body(&bytes)[..cut].to_vec(), VERSION),
             "truncated in positions",
         );
         // The contact flag.
-        let flag = header + counters + 24 + 8 * 6 * 4;
+        let flag = header + counters + state + 8 * 6 * 4;
         says(&forge(flag, &[7]), "contact flag 7 is neither 0 nor 1");
     }
 

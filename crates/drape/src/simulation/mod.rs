@@ -242,6 +242,7 @@ pub fn history_columns(setup: &Setup) -> Vec<String> {
             "slack_fraction",
             "membrane_energy",
             "bending_energy",
+            "friction_dissipation",
         ]
         .map(String::from),
     );
@@ -289,6 +290,7 @@ impl History<'_> {
             r.states[2],
             r.strain.membrane,
             r.strain.bending,
+            state.friction_dissipation,
         ]);
         let path = self.writer.path().to_path_buf();
         self.writer.write_row(&row).map_err(io_err(&path))?;

@@ -245,6 +245,7 @@ pub(super) fn fresh<'a>(
     let strain0 = StrainEnergy {
         membrane: model.strain_energy(&state.positions),
         bending: model.bending().map_or(0.0, |b| b.energy(&state.positions)),
+        dissipated: 0.0,
     };
     let (stretch0, fractions0) = model.stretch_and_states(&state.positions);
     let contact0 = contact_report(model, &state);

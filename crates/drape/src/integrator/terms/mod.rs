@@ -1,16 +1,18 @@
 //! The terms of a step's incremental potential ([`super::potential`]),
 //! one concept per file: the membrane's strain energy, inertia, the
-//! external loads, penalty contact. Each states its energy, gradient and
+//! external loads, penalty contact, friction. Each states its energy, gradient and
 //! Hessian, and its test checks them against central finite differences
 //! through the one checker, `check_term` (a test helper).
 
 mod bending;
+mod friction;
 mod inertia;
 mod loads;
 mod membrane;
 mod penalty;
 
 pub use bending::BendingTerm;
+pub use friction::FrictionTerm;
 pub use inertia::InertiaTerm;
 pub use loads::LoadTerm;
 pub use membrane::MembraneTerm;

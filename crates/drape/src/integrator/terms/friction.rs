@@ -1,0 +1,320 @@
+//! Coulomb friction against the obstacles, penalty contact: the smoothed,
+//! lagged friction potential of Incremental Potential Contact (Li et al.
+//! 2020, "Incremental Potential Contact", ACM TOG 39(4), §5;
+//! docs/theory.md §1.8).
+//!
+//! For each node `p` in contact with a body at the start of the step
+//! (`g < 0` at the start positions `x`), the normal force and the tangent
+//! plane are lagged from there:
+//!
+//! ```text
+//! lambda_p = eta |g_p(x)|                       normal force (N)
+//! T_p      = I - n n^T                          tangent projector, n the normal at x
+//! u_p      = T_p (y_p - x_p - v h)              tangential slip over the step (m),
+//!                                               v the body's velocity
+//! D(Y)     = sum_p mu lambda_p f0(|u_p|)        (J)
+//! f0(s)    = -s^3 / (3 e^2) + s^2 / e + e / 3   s < e = eps_v h
+//!          = s                                  s >= e
+//! ```
+//!
+//! `f1 = f0'` rises from 0 at no slip to 1 at the slip `eps_v h`: below
+//! the slip speed `eps_v` friction is a stiff viscous resistance (the
+//! fabric creeps at most at `eps_v`), above it Coulomb's force `mu lambda`
+//! against the slip. `f0` is C^1 and convex on `s >= 0`, so each node's
+//! 3x3 Hessian
+//!
+//! ```text
+//! dD/dy_p   = mu lambda f1(s) u / s
+//! d2D/dy_p2 = mu lambda [ f1(s)/s T + (f1'(s) - f1(s)/s) u u^T / s^2 ]
+//!           = mu lambda [ (2/e - s/e^2) T - (s/e^2) û û^T ]     s < e
+//!           = mu lambda / s [ T - û û^T ]                       s >= e
+//! ```
+//!
+//! (`û = u / s`) is positive semi-definite: nothing to project. The lag
+//! (one per step: the normal force and the tangent plane of the step's
+//! start) makes `D` a potential of the step, so the line search and the
+//! projected Newton apply. The work friction does against the slip over
+//! the step, `mu lambda f1(s) s` a node, is the energy it dissipates.
+
+use super::super::potential::{Stencils, StepContext, StepTerm, TermValue};
+use crate::contact::{ContactModel, ContactState};
+use crate::solver::SparsePattern;
+
+/// A node in contact at the start of the step, with what is lagged.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Lagged {
+    node: usize,
+    /// `mu lambda` (N).
+    force: f64,
+    /// The unit normal at the start.
+    normal: [f64; 3],
+    /// Where the node would be with no slip: its start position carried
+    /// by the body's motion over the step (m).
+    anchor: [f64; 3],
+}
+
+/// The friction potential of a step.
+pub struct FrictionTerm<'a> {
+    pattern: &'a SparsePattern,
+    pairs: Vec<Lagged>,
+    /// `eps_v h` (m): the slip below which friction is viscous.
+    smooth: f64,
+    /// Dissipation at the last evaluation (J).
+    dissipated: f64,
+}
+
+impl<'a> FrictionTerm<'a> {
+    /// The friction of `contact` (penalty `stiffness`, N/m) over the step
+    /// of size `dt` from positions `start` at time `t0`, whose contact
+    /// state is `state`: the pairs in contact at the start, lagged.
+    pub fn new(
+        contact: &ContactModel,
+        pattern: &'a SparsePattern,
+        stiffness: f64,
+        (start, t0, dt): (&[f64], f64, f64),
+        state: &ContactState,
+    ) -> Self {
+        let (near, _) = contact.near_pairs(start, t0, state, 0.0, false);
+        let pairs = near
+            .into_iter()
+            .map(|(p, k, prox)| {
+                let v = contact.bodies[k].velocity;
+                Lagged {
+                    node: p,
+                    force: contact.friction * stiffness * (-prox.gap),
+                    normal: prox.normal,
+                    anchor: std::array::from_fn(|i| start[3 * p + i] + v[i] * dt),
+                }
+            })
+            .collect();
+        Self {
+            pattern,
+            pairs,
+            smooth: contact.stick_speed * dt,
+            dissipated: 0.0,
+        }
+    }
+
+    /// The energy friction dissipates over the step, at the last
+    /// evaluation (J).
+    pub fn dissipated(&self) -> f64 {
+        self.dissipated
+    }
+}
+
+/// `f0(s)`, `f1(s) = f0'(s)` and `f1'(s)` of the module docs, for a slip
+/// `s >= 0` and the smoothing slip `e > 0`.
+fn mollifier(s: f64, e: f64) -> (f64, f64, f64) {
+    if s >= e {
+        (s, 1.0, 0.0)
+    } else {
+        let r = s / e;
+        (
+            e * (-r * r * r / 3.0 + r * r + 1.0 / 3.0),
+            -r * r + 2.0 * r,
+            (2.0 - 2.0 * r) / e,
+        )
+    }
+}
+
+impl StepTerm for FrictionTerm<'_> {
+    fn name(&self) -> &'static str {
+        "friction"
+    }
+
+    fn stencils(&self) -> Stencils<'_> {
+        Stencils::Nodes
+    }
+
+    fn add(
+        &mut self,
+        _ctx: &StepContext,
+        y: &[f64],
+        g: &mut [f64],
+        mut h: Option<&mut [f64]>,
+    ) -> TermValue {
+        let e = self.smooth;
+        let (mut energy, mut dissipated, mut scale) = (0.0, 0.0, 0.0);
+        for pair in &self.pairs {
+            let p = pair.node;
+            let n = pair.normal;
+            let d: [f64; 3] = std::array::from_fn(|i| y[3 * p + i] - pair.anchor[i]);
+            let dn = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+            let u: [f64; 3] = std::array::from_fn(|i| d[i] - dn * n[i]);
+            let s = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
+            let (f0, f1, df1) = mollifier(s, e);
+            let mu_lambda = pair.force;
+            energy += mu_lambda * f0;
+            dissipated += mu_lambda * f1 * s;
+            scale += mu_lambda * f1;
+            if s > 0.0 {
+                for i in 0..3 {
+                    g[3 * p + i] += mu_lambda * f1 * u[i] / s;
+                }
+            }
+            if let Some(h) = h.as_deref_mut() {
+                // f1 / s, and (f1' - f1 / s) / s^2 multiplying u u^T; at
+                // s = 0 (no slip yet) the limits 2 / e and 0.
+                let (a, b) = if s > 0.0 {
+                    (f1 / s, (df1 - f1 / s) / (s * s))
+                } else {
+                    (2.0 / e, 0.0)
+                };
+                let block = self
+                    .pattern
+                    .node_block(p, p)
+                    .expect("diagonal blocks are in the pattern");
+                for i in 0..3 {
+                    for j in 0..3 {
+                        let t = f64::from(u8::from(i == j)) - n[i] * n[j];
+                        h[self.pattern.entry(block, p, i, j)] +=
+                            mu_lambda * (a * t + b * u[i] * u[j]);
+                    }
+                }
+            }
+        }
+        self.dissipated = dissipated;
+        TermValue {
+            value: energy,
+            potential: true,
+            scale,
+        }
+    }
+
+    fn dissipation(&self) -> f64 {
+        self.dissipated
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrator::terms::{check_projection, check_term};
+    use crate::scenario::Scenario;
+    use std::path::Path;
+
+    /// A 10 cm patch of 4 x 4 squares pressed 1 mm (vertically) into a
+    /// plane tilted about y, moving along x at 1 cm/s, with friction 0.4 and a slip speed of 1e-3 m/s, over a
+    /// step of 10 ms from its start: the smoothing slip is 1e-5 m.
+    fn pressed_patch() -> (crate::scenario::Setup, Vec<f64>) {
+        let text = r#"
+[mesh]
+shape = "rectangle"
+size = [0.1, 0.1]
+divisions = [4, 4]
+[material]
+youngs_modulus = 2.0e6
+poisson_ratio = 0.3
+density = 320.0
+thickness = 0.6e-3
+[[obstacle]]
+shape = "plane"
+point = [0.0, 0.0, -0.1]
+normal = [-0.3, 0.0, 1.0]
+velocity = [0.01, 0.0, 0.0]
+[contact]
+method = "penalty"
+penalty = 5.0e4
+friction = 0.4
+stick_speed = 1.0e-3
+[time]
+segments = [{ steps = 1, dt = 1e-2 }]
+"#;
+        let path = Path::new("friction.toml");
+        let setup = Scenario::parse(text, path)
+            .and_then(|s| s.build(path, text))
+            .expect("a valid scenario");
+        // Every node 1 mm below the tilted plane.
+        let start = setup
+            .model
+            .initial_positions()
+            .chunks(3)
+            .flat_map(|x| [x[0], x[1], -0.1 + 0.3 * x[0] - 1e-3])
+            .collect();
+        (setup, start)
+    }
+
+    /// Value, gradient and Hessian against central differences, with the
+    /// nodes slipped from their anchors by a spread of amounts: some
+    /// below the smoothing slip (viscous), some above (Coulomb), one not
+    /// at all; and the Hessian semi-definite, so that its projection is
+    /// itself. Steps of 1e-9 m against slips from 3e-6 to 1e-3 m.
+    #[test]
+    fn friction_term_matches_finite_differences() {
+        let (setup, start) = pressed_patch();
+        let model = &setup.model;
+        let contact = model.contact().expect("an obstacle");
+        let state = contact.initial_state(&start);
+        let mut term =
+            FrictionTerm::new(contact, model.pattern(), 5.0e4, (&start, 0.0, 1e-2), &state);
+        assert_eq!(term.pairs.len(), 25, "every node in contact");
+        // The anchors moved with the plane by 1e-4 m along x.
+        let y: Vec<f64> = start
+            .chunks(3)
+            .enumerate()
+            .flat_map(|(a, x)| {
+                let slip = if a == 12 {
+                    0.0
+                } else {
+                    3e-6 * (a as f64).powf(1.5)
+                };
+                [
+                    x[0] + 1e-4 + slip,
+                    x[1] - 0.5 * slip,
+                    x[2] + 0.3 * (1e-4 + slip),
+                ]
+            })
+            .collect();
+        let ctx = StepContext {
+            time: 1e-2,
+            contact: Some(&state),
+            project: None,
+        };
+        let (eh, eg) = check_term(&mut term, &ctx, model.pattern(), &y, 1e-9);
+        assert!(eh < 1e-6, "Hessian {eh:e}");
+        assert!(eg < 1e-6, "gradient {eg:e}");
+        let (exact, projected, smallest) = check_projection(&mut term, &ctx, model.pattern(), &y);
+        assert!(smallest > -1e-12, "smallest eigenvalue {smallest:e}");
+        assert_eq!(exact, projected);
+        let mut g = vec![0.0; y.len()];
+        term.add(&ctx, &y, &mut g, None);
+        assert!(term.dissipated() > 0.0);
+    }
+
+    /// Sliding well above the smoothing slip, each node's friction force
+    /// is Coulomb's, `mu lambda`, against the slip: the gradient's
+    /// magnitude is 0.4 x 5e4 x 1e-3 N = 20 N, whatever the slip.
+    #[test]
+    fn sliding_friction_is_coulombs_force() {
+        let (setup, start) = pressed_patch();
+        let model = &setup.model;
+        let contact = model.contact().expect("an obstacle");
+        let state = contact.initial_state(&start);
+        let mut term =
+            FrictionTerm::new(contact, model.pattern(), 5.0e4, (&start, 0.0, 1e-2), &state);
+        let len = (1.0f64 + 0.09).sqrt();
+        let (nx, nz) = (-0.3 / len, 1.0 / len);
+        let lambda = 5.0e4 * 1e-3 * nz;
+        for slip in [1e-4, 1e-2] {
+            // Along the plane's slope, beyond the plane's own motion.
+            let y: Vec<f64> = start
+                .chunks(3)
+                .flat_map(|x| [x[0] + 1e-4 + slip * nz, x[1], x[2] - slip * nx])
+                .collect();
+            let mut g = vec![0.0; y.len()];
+            let ctx = StepContext {
+                time: 1e-2,
+                contact: Some(&state),
+                project: None,
+            };
+            term.add(&ctx, &y, &mut g, None);
+            for f in g.chunks(3) {
+                let norm = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+                assert!(
+                    (norm - 0.4 * lambda).abs() < 1e-9 * lambda,
+                    "{norm} at slip {slip}"
+                );
+            }
+        }
+    }
+}
