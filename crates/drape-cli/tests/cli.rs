@@ -1311,6 +1311,11 @@ const BAD_INPUTS: &[BadInput] = &[
         line: Some(27),
     },
     BadInput {
+        file: "obstacle_friction_negative.toml",
+        fragments: &["`obstacle[0].friction`", "finite number >= 0", "-0.5"],
+        line: Some(22),
+    },
+    BadInput {
         file: "friction_lagrange.toml",
         fragments: &[
             "`contact.friction`",

@@ -79,6 +79,7 @@ fn penalty_terms(
         }],
         method: ContactMethod::Penalty { stiffness: eta },
         friction: 0.0,
+        body_friction: Vec::new(),
         stick_speed: drape::contact::DEFAULT_STICK_SPEED,
     };
     let pattern = SparsePattern::new(1, std::iter::once(&[0usize][..]));
@@ -195,6 +196,7 @@ fn penalty_force_and_hessian_match_finite_differences_for_every_obstacle() {
                 }],
                 method: ContactMethod::Penalty { stiffness: eta },
                 friction: 0.0,
+                body_friction: Vec::new(),
                 stick_speed: drape::contact::DEFAULT_STICK_SPEED,
             };
             let hints = model.initial_state(&y0);

@@ -14,8 +14,15 @@ use drape::simulation::run;
 /// A 5 cm patch (4 x 4 squares) lying on the plane z = 0 (moving at
 /// `velocity`), under gravity `g` at `angle` (radians) from the
 /// vertical, tilted towards +x — an incline of that angle — with
-/// friction `mu`, for 0.5 s of 1 ms steps; the history.
-fn on_plane(angle: f64, mu: f64, velocity: f64, name: &str) -> (Vec<String>, Vec<Vec<f64>>) {
+/// friction `mu` (the plane's own `plane_mu` where given), for 0.5 s of
+/// 1 ms steps; the history.
+fn on_plane(
+    angle: f64,
+    (mu, plane_mu): (f64, Option<f64>),
+    velocity: f64,
+    name: &str,
+) -> (Vec<String>, Vec<Vec<f64>>) {
+    let own = plane_mu.map_or(String::new(), |m| format!("friction = {m}"));
     let (s, c) = angle.sin_cos();
     let text = rectangle(
         [0.05, 0.05],
@@ -30,6 +37,7 @@ shape = "plane"
 point = [0.0, 0.0, 0.0]
 normal = [0.0, 0.0, 1.0]
 velocity = [{velocity}, 0.0, 0.0]
+{own}
 [contact]
 method = "penalty"
 penalty = 5.0e4
@@ -61,7 +69,7 @@ fn an_incline_holds_below_the_friction_angle_and_slides_above() {
     let mu = 0.4;
     for (tan, name) in [(0.2, "incline-stick"), (0.6, "incline-slide")] {
         let angle = f64::atan(tan);
-        let (h, rows) = on_plane(angle, mu, 0.0, name);
+        let (h, rows) = on_plane(angle, (mu, None), 0.0, name);
         let x = column(&h, &rows, "c_x");
         let t = column(&h, &rows, "time");
         let moved = x.last().unwrap() - x[0];
@@ -88,7 +96,7 @@ fn an_incline_holds_below_the_friction_angle_and_slides_above() {
 #[test]
 fn a_moving_plane_drags_the_fabric_that_sticks_to_it() {
     for (mu, name) in [(0.5, "drag"), (0.0, "no-drag")] {
-        let (h, rows) = on_plane(0.0, mu, 0.1, name);
+        let (h, rows) = on_plane(0.0, (mu, None), 0.1, name);
         let x = column(&h, &rows, "c_x");
         let t = column(&h, &rows, "time");
         let n = rows.len();
@@ -97,6 +105,31 @@ fn a_moving_plane_drags_the_fabric_that_sticks_to_it() {
             assert!((speed - 0.1).abs() < 2e-3, "mu {mu}: speed {speed} m/s");
         } else {
             assert!(speed.abs() < 1e-9 && x[n - 1].abs() < 1e-9, "speed {speed}");
+        }
+    }
+}
+
+/// An obstacle's own `friction` takes the place of `[contact] friction`:
+/// the plane's 0.4 holds the patch on the incline of tan θ = 0.2 although
+/// `[contact]` says 0, and the plane's 0 lets it slide freely (`g sin θ
+/// t^2 / 2`, to 2 %) although `[contact]` says 0.4.
+#[test]
+fn an_obstacles_own_friction_takes_the_place_of_the_contacts() {
+    let angle = f64::atan(0.2);
+    for ((mu, plane_mu), holds) in [((0.0, Some(0.4)), true), ((0.4, Some(0.0)), false)] {
+        let (h, rows) = on_plane(angle, (mu, plane_mu), 0.0, &format!("own-{holds}"));
+        let x = column(&h, &rows, "c_x");
+        let t = column(&h, &rows, "time");
+        let moved = x.last().unwrap() - x[0];
+        if holds {
+            assert!(moved.abs() < 1e-3, "moved {moved:e} m");
+        } else {
+            let end = *t.last().unwrap();
+            let expected = 0.5 * 9.8 * angle.sin() * end * end;
+            assert!(
+                (moved - expected).abs() < 0.02 * expected,
+                "{moved} against {expected}"
+            );
         }
     }
 }

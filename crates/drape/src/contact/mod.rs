@@ -115,6 +115,9 @@ pub struct ContactModel {
     /// Coulomb's friction coefficient `mu` against every obstacle (0:
     /// frictionless). Penalty contact only ([`crate::integrator::terms::FrictionTerm`]).
     pub friction: f64,
+    /// Obstacle `k`'s own coefficient in place of `friction`, where
+    /// `body_friction[k]` is `Some` (empty: none).
+    pub body_friction: Vec<Option<f64>>,
     /// The slip speed `eps_v` (m/s) below which friction is a stiff
     /// viscous resistance rather than Coulomb's constant force (the
     /// smoothing of Li et al. 2020): the creep speed of a fabric that
@@ -156,6 +159,21 @@ pub struct ContactReport {
 }
 
 impl ContactModel {
+    /// The friction coefficient against obstacle `k`: its own, or
+    /// `friction`.
+    pub fn friction_of(&self, k: usize) -> f64 {
+        self.body_friction
+            .get(k)
+            .copied()
+            .flatten()
+            .unwrap_or(self.friction)
+    }
+
+    /// Whether friction acts against any obstacle.
+    pub fn has_friction(&self) -> bool {
+        (0..self.bodies.len()).any(|k| self.friction_of(k) > 0.0)
+    }
+
     /// The initial state of `nodes` nodes: features computed at the initial
     /// positions, nothing active.
     pub fn initial_state(&self, y: &[f64]) -> ContactState {
@@ -349,6 +367,7 @@ mod tests {
             ],
             method: ContactMethod::Penalty { stiffness: 1e4 },
             friction: 0.0,
+            body_friction: Vec::new(),
             stick_speed: DEFAULT_STICK_SPEED,
         };
         // Points on a lattice through the boxes' faces, edges and corners,
@@ -411,6 +430,7 @@ mod tests {
             ],
             method: ContactMethod::Lagrange,
             friction: 0.0,
+            body_friction: Vec::new(),
             stick_speed: DEFAULT_STICK_SPEED,
         };
         let y = [

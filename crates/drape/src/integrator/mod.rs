@@ -255,7 +255,7 @@ fn step_potential<'a>(
         )));
         // Friction lags the normal force and the tangent plane of the
         // step's start (the contact state is the step's start's too).
-        if contact.friction > 0.0
+        if contact.has_friction()
             && let (Some((start, dt)), Some(state)) = (terms.start, state)
         {
             let lag = (start, terms.time - dt, dt);

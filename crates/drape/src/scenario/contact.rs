@@ -144,10 +144,36 @@ pub(super) fn build_contact(
     let bodies = (s.obstacles.iter().enumerate())
         .map(|(i, o)| build_body(c, i, o, base, inputs))
         .collect::<Result<_, _>>()?;
+    let mut body_friction = Vec::new();
+    for (i, o) in s.obstacles.iter().enumerate() {
+        let mu = match o.friction() {
+            Some(mu) if !(mu.is_finite() && mu >= 0.0) => {
+                return Err(c.invalid(
+                    "obstacle",
+                    Some(i),
+                    "friction",
+                    format!("must be a finite number >= 0 (Coulomb's coefficient), not {mu}"),
+                ));
+            }
+            Some(mu) if mu > 0.0 && method == ContactMethod::Lagrange => {
+                return Err(c.invalid(
+                    "obstacle",
+                    Some(i),
+                    "friction",
+                    format!(
+                        "= {mu} needs [contact] method = \"penalty\" for now: friction with multipliers is not implemented yet"
+                    ),
+                ));
+            }
+            mu => mu,
+        };
+        body_friction.push(mu);
+    }
     Ok(Some(ContactModel {
         bodies,
         method,
         friction,
+        body_friction,
         stick_speed,
     }))
 }

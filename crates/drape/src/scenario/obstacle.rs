@@ -55,6 +55,9 @@ pub struct PlaneObstacleSpec {
     pub normal: [f64; 3],
     /// Rigid velocity (m/s), finite. Default 0.
     pub velocity: Option<[f64; 3]>,
+    /// This obstacle's Coulomb friction coefficient, >= 0 and finite, in
+    /// place of `[contact] friction`. Default: that one.
+    pub friction: Option<f64>,
 }
 
 /// `shape = "box"`: an axis-aligned box.
@@ -71,6 +74,9 @@ pub struct BoxObstacleSpec {
     pub edge_radius: Option<f64>,
     /// Rigid velocity (m/s), finite. Default 0.
     pub velocity: Option<[f64; 3]>,
+    /// This obstacle's Coulomb friction coefficient, >= 0 and finite, in
+    /// place of `[contact] friction`. Default: that one.
+    pub friction: Option<f64>,
 }
 
 /// `shape = "sphere"`.
@@ -83,6 +89,9 @@ pub struct SphereObstacleSpec {
     pub radius: f64,
     /// Rigid velocity (m/s), finite. Default 0.
     pub velocity: Option<[f64; 3]>,
+    /// This obstacle's Coulomb friction coefficient, >= 0 and finite, in
+    /// place of `[contact] friction`. Default: that one.
+    pub friction: Option<f64>,
 }
 
 /// `shape = "cylinder"`: a closed cylinder.
@@ -104,6 +113,9 @@ pub struct CylinderObstacleSpec {
     pub edge_radius: Option<f64>,
     /// Rigid velocity (m/s), finite. Default 0.
     pub velocity: Option<[f64; 3]>,
+    /// This obstacle's Coulomb friction coefficient, >= 0 and finite, in
+    /// place of `[contact] friction`. Default: that one.
+    pub friction: Option<f64>,
 }
 
 /// `shape = "mesh"`: a closed, consistently oriented triangle mesh.
@@ -115,6 +127,9 @@ pub struct MeshObstacleSpec {
     pub path: PathBuf,
     /// Rigid velocity (m/s), finite. Default 0.
     pub velocity: Option<[f64; 3]>,
+    /// This obstacle's Coulomb friction coefficient, >= 0 and finite, in
+    /// place of `[contact] friction`. Default: that one.
+    pub friction: Option<f64>,
 }
 
 impl ObstacleSpec {
@@ -137,6 +152,17 @@ impl ObstacleSpec {
             Self::Sphere(o) => o.velocity,
             Self::Cylinder(o) => o.velocity,
             Self::Mesh(o) => o.velocity,
+        }
+    }
+
+    /// The obstacle's own friction coefficient, if given.
+    pub fn friction(&self) -> Option<f64> {
+        match self {
+            Self::Plane(o) => o.friction,
+            Self::Box(o) => o.friction,
+            Self::Sphere(o) => o.friction,
+            Self::Cylinder(o) => o.friction,
+            Self::Mesh(o) => o.friction,
         }
     }
 

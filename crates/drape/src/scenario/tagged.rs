@@ -160,6 +160,7 @@ mod tests {
             max: [1.0; 3],
             edge_radius: None,
             velocity: None,
+            friction: None,
         };
         assert_eq!(s.obstacles, vec![ObstacleSpec::Box(expected)]);
         assert_eq!(

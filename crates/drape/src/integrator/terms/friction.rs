@@ -77,11 +77,12 @@ impl<'a> FrictionTerm<'a> {
         let (near, _) = contact.near_pairs(start, t0, state, 0.0, false);
         let pairs = near
             .into_iter()
+            .filter(|&(_, k, _)| contact.friction_of(k) > 0.0)
             .map(|(p, k, prox)| {
                 let v = contact.bodies[k].velocity;
                 Lagged {
                     node: p,
-                    force: contact.friction * stiffness * (-prox.gap),
+                    force: contact.friction_of(k) * stiffness * (-prox.gap),
                     normal: prox.normal,
                     anchor: std::array::from_fn(|i| start[3 * p + i] + v[i] * dt),
                 }
