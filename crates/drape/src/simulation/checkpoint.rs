@@ -12,7 +12,9 @@
 //!           steps since the last frame u64, step of the last frame u64, wall seconds f64,
 //!           segment u64, step size f64, still steps u64
 //! state: time f64, external work f64, acceleration persistence f64,
-//!        friction dissipation f64, positions, velocities, accelerations,
+//!        friction dissipation f64, the linear solver's counts (7 u64:
+//!        solves, Cholesky, LU, Krylov iterations, block LU, chord solves,
+//!        multigrid builds), positions, velocities, accelerations,
 //!        external forces of the last step (dofs f64 each)
 //! contact u8 (0/1), then hints (nodes x bodies u32), held (nodes x 2 u32, u32::MAX: none),
 //!        multipliers (nodes f64)
@@ -25,7 +27,9 @@
 //! changed, naming it. A path is kept as the bytes of the operating
 //! system's string (Unix), so that any path survives.
 //!
-//! Version 4 (drape before friction) is read with no friction dissipated.
+//! Version 4 (drape before friction) is read with no friction dissipated
+//! and the linear solver's counts 0 (the resumed summary then counts the
+//! session's alone, as before).
 //! Version 3 (drape before the input files were recorded) is read too,
 //! without them: it resumes as before, without checking the files.
 //! Version 1 (drape before the predictor carried the persistence) resumes
@@ -47,6 +51,7 @@ use crate::contact::lagrange::MAX_ACTIVE_SET_ROUNDS;
 use crate::integrator::State;
 use crate::scenario::{Analysis, InputFile, Setup, fnv1a};
 use crate::simulation::schedule::REST_STEPS;
+use crate::solver::LinearStats;
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"DRAPECKP";
@@ -89,6 +94,22 @@ pub struct Counters {
     /// than the rest speed (0 without a rest criterion), below
     /// [`REST_STEPS`].
     pub still_steps: usize,
+    /// What the linear solver has done so far (version 5; zeros from an
+    /// older checkpoint): a resumed run's summary counts the whole run.
+    pub linear: LinearStats,
+}
+
+/// The counts of [`LinearStats`], in the file's order.
+fn linear_counts(l: &LinearStats) -> [usize; 7] {
+    [
+        l.solves,
+        l.cholesky_factorizations,
+        l.lu_factorizations,
+        l.krylov_iterations,
+        l.block_lu_factorizations,
+        l.chord_solves,
+        l.multigrid_builds,
+    ]
 }
 
 /// Everything a run needs to continue.
@@ -228,6 +249,9 @@ impl Checkpoint {
         b.extend_from_slice(&s.external_work.to_le_bytes());
         b.extend_from_slice(&s.persistence.to_le_bytes());
         b.extend_from_slice(&s.friction_dissipation.to_le_bytes());
+        for v in linear_counts(&c.linear) {
+            b.extend_from_slice(&(v as u64).to_le_bytes());
+        }
         for v in [
             &s.positions,
             &s.velocities,
@@ -383,6 +407,22 @@ impl Checkpoint {
         } else {
             0.0
         };
+        if version >= 5 {
+            let mut n = [0usize; 7];
+            for v in &mut n {
+                *v = r.usize("linear-solver counts")?;
+            }
+            let [solves, cholesky, lu, krylov, block_lu, chord, multigrid] = n;
+            counters.linear = LinearStats {
+                solves,
+                cholesky_factorizations: cholesky,
+                lu_factorizations: lu,
+                krylov_iterations: krylov,
+                block_lu_factorizations: block_lu,
+                chord_solves: chord,
+                multigrid_builds: multigrid,
+            };
+        }
         let positions = r.f64s(dofs, "positions")?;
         let velocities = r.f64s(dofs, "velocities")?;
         let accelerations = r.f64s(dofs, "accelerations")?;
@@ -902,6 +942,12 @@ mod tests {
                 segment: 1,
                 step_size: 2.5e-3,
                 still_steps: 4,
+                linear: LinearStats {
+                    solves: 30,
+                    block_lu_factorizations: 21,
+                    chord_solves: 9,
+                    ..LinearStats::default()
+                },
             },
             state: State {
                 time: 0.3,
@@ -1001,7 +1047,7 @@ mod tests {
         // persistence, then (version 5) the friction dissipation.
         let friction = at + 8 * 3 + 8 * 4 + 8 * 5 + 8 * 3 + 8 * 2 + 8;
         let mut v4 = bytes[..friction].to_vec();
-        v4.extend_from_slice(&bytes[friction + 8..]);
+        v4.extend_from_slice(&bytes[friction + 8 + 8 * 7..]);
         if version == 4 {
             return seal(v4[..v4.len() - 8].to_vec(), 4);
         }
@@ -1038,8 +1084,9 @@ mod tests {
         let c = sample(true);
         let bytes = c.to_bytes();
         let mut expected = c.clone();
-        // Version 4: no friction, none dissipated.
+        // Version 4: no friction, none dissipated, no linear counts.
         expected.state.friction_dissipation = 0.0;
+        expected.counters.linear = LinearStats::default();
         let v4 = Checkpoint::from_bytes(&as_version(&bytes, 4), 6, 2, 0xdead_beef).unwrap();
         assert_eq!(v4, expected);
         expected.inputs = None;
@@ -1208,8 +1255,9 @@ mod tests {
         // A sealed file cut in the positions.
         let header = 8 + 4 + 8 + 8 + (4 + 9 + 4 + 25 + 8) + 24;
         let counters = 8 * 12;
-        // Time, external work, persistence and friction dissipation.
-        let state = 8 * 4;
+        // Time, external work, persistence, friction dissipation and the
+        // linear solver's 7 counts.
+        let state = 8 * 4 + 8 * 7;
         let cut = header + counters + state + 8 * 3;
         says(
             &seal(body(&bytes)[..cut].to_vec(), VERSION),

@@ -671,6 +671,7 @@ impl Stepper<'_, '_> {
             inputs: Some(self.setup.inputs.clone()),
             counters: Counters {
                 wall_seconds: self.counters.wall_seconds + self.start.elapsed().as_secs_f64(),
+                linear: self.ws.newton.linear.stats,
                 ..self.counters
             },
             state: self.state.clone(),

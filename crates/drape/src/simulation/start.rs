@@ -173,6 +173,8 @@ pub(super) fn resume<'a>(
         .into());
     }
     ws.f_ext.copy_from_slice(&ck.external_forces);
+    // The summary counts the linear solves of the whole run.
+    ws.newton.linear.stats = ck.counters.linear;
     let entries = ck
         .frames
         .iter()

@@ -76,7 +76,8 @@ pub struct Summary {
     pub external_work: f64,
     /// Final position of each monitor.
     pub monitors: BTreeMap<String, [f64; 3]>,
-    /// What the linear solver did (this session of the run).
+    /// What the linear solver did over the whole run (a resumed session
+    /// adds to the checkpoint's counts).
     pub linear: crate::solver::LinearStats,
     /// What the scenario may not do as it says ([`warnings`]); absent when
     /// there is nothing to warn about.
