@@ -215,6 +215,16 @@ fn main() -> ExitCode {
     }
 }
 
+/// A number as a person writes it: plain between 1e-4 and 1e6, in
+/// e-notation outside (Rust's `{}` writes 1e308 with 309 digits).
+fn human(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-4..1e6).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
 fn load(path: &Path) -> Result<Setup, Failure> {
     let (scenario, source) = Scenario::read(path)?;
     Ok(scenario.build(path, &source)?)
@@ -244,14 +254,15 @@ fn check(path: &Path) -> Result<(), Failure> {
             let steps: usize = segments.iter().map(|s| s.0).sum();
             let end: f64 = segments.iter().map(|(n, dt)| *n as f64 * dt).sum();
             println!(
-                "  dynamic   beta = {}, gamma = {}, {steps} {} to t = {end} s",
-                newmark.beta,
-                newmark.gamma,
-                if steps == 1 { "step" } else { "steps" }
+                "  dynamic   beta = {}, gamma = {}, {steps} {} to t = {} s",
+                human(newmark.beta),
+                human(newmark.gamma),
+                if steps == 1 { "step" } else { "steps" },
+                human(end)
             );
             if let Some(adaptive) = &setup.adaptive {
                 let dt_max = match adaptive.dt_max {
-                    Some(dt_max) => format!("{dt_max} s"),
+                    Some(dt_max) => format!("{} s", human(dt_max)),
                     None => "10 x each segment's dt".into(),
                 };
                 println!("  adaptive  steps grow after easy steps up to dt_max = {dt_max}");
@@ -261,7 +272,7 @@ fn check(path: &Path) -> Result<(), Failure> {
                     "  rest      ends once every node is slower than {:e} m/s for {} steps, from t = {} s",
                     rest.speed,
                     drape::simulation::schedule::REST_STEPS,
-                    rest.after
+                    human(rest.after)
                 );
             }
         }

@@ -663,6 +663,25 @@ fn example_lists_prints_and_writes_the_bundled_examples() {
     );
 }
 
+/// `check` writes numbers as a person does (issue 35: `dt_max = 1e308`
+/// came out with 309 digits): e-notation outside 1e-4 to 1e6.
+#[test]
+fn check_prints_a_huge_dt_max_in_e_notation() {
+    let tmp = TempDir::new("check-dt-max");
+    let scenario = tmp.path().join("dtmax.toml");
+    std::fs::write(
+        &scenario,
+        "[mesh]\nshape = \"rectangle\"\nsize = [0.2, 0.2]\ndivisions = [4, 4]\n[material]\nyoungs_modulus = 2.0e6\npoisson_ratio = 0.3\ndensity = 320.0\nthickness = 0.6e-3\n[time]\nsegments = [{ steps = 10, dt = 0.01 }]\nadaptive = true\ndt_max = 1e308\n",
+    )
+    .unwrap();
+    let o = drape(tmp.path(), &["check".as_ref(), scenario.as_os_str()]);
+    let what = "drape check dtmax.toml";
+    assert_eq!(o.status.code(), Some(0), "{}", describe(what, &o));
+    let out = stdout(&o);
+    assert!(out.contains("dt_max = 1e308 s"), "{}", describe(what, &o));
+    assert!(out.lines().all(|l| l.len() < 200), "{}", describe(what, &o));
+}
+
 /// `example --write` onto a file that exists (a scenario of one's own)
 /// refuses, exit 2, naming it and `--force`, and leaves it as it was;
 /// with `--force` it replaces it; onto a directory it refuses, exit 2
