@@ -18,7 +18,7 @@
 //!   bending"). With bending, `wrinkling = "none"` lets the folds carry
 //!   the compression.
 
-use super::schedule::DEFAULT_DT_MAX_FACTOR;
+use super::schedule::{DEFAULT_DT_MAX_FACTOR, END_TOLERANCE, REST_STEPS};
 use crate::scenario::{Analysis, Setup};
 use crate::vec3::{norm, sub};
 
@@ -65,6 +65,29 @@ fn rest_after_the_end(setup: &Setup, out: &mut Vec<String>) {
     if rest.after >= end {
         out.push(format!(
             "time.rest.after = {} s is at or after the schedule's end (t = {end} s): the rest criterion can never be met, and the run will end at t = {end} s whether or not the fabric is at rest",
+            rest.after
+        ));
+        return;
+    }
+    // With fixed steps, the rest criterion needs REST_STEPS steps that end
+    // at or after `after`: the REST_STEPS-th last step must (adaptive
+    // steps may shrink and add steps: not judged).
+    if setup.adaptive.is_some() {
+        return;
+    }
+    let mut t = end;
+    let mut left = REST_STEPS - 1;
+    for &(steps, dt) in segments.iter().rev() {
+        let take = left.min(steps);
+        t -= take as f64 * dt;
+        left -= take;
+        if left == 0 {
+            break;
+        }
+    }
+    if left > 0 || t < rest.after * (1.0 - END_TOLERANCE) {
+        out.push(format!(
+            "time.rest.after = {} s leaves fewer than the {REST_STEPS} steps the rest criterion needs before the schedule's end (t = {end} s): it can never be met, and the run will end at t = {end} s whether or not the fabric is at rest",
             rest.after
         ));
     }
@@ -114,12 +137,13 @@ mod tests {
     use std::path::Path;
 
     /// The warnings of a 4 x 4 square with `material` lines added to
-    /// `[material]` and `time` lines to `[time]` (one 10 ms step).
+    /// `[material]` and `time` lines to `[time]` (20 steps of 0.5 ms, to
+    /// t = 0.01 s).
     fn warned_with(material: &str, time: &str) -> Vec<String> {
         let text = format!(
             "title = \"w\"\n[mesh]\nshape = \"rectangle\"\nsize = [0.1, 0.1]\ndivisions = [4, 4]\n\
              [material]\nyoungs_modulus = 2.0e6\npoisson_ratio = 0.3\ndensity = 320.0\nthickness = 0.6e-3\n{material}\n\
-             [time]\nsegments = [{{ steps = 1, dt = 0.01 }}]\n{time}\n"
+             [time]\nsegments = [{{ steps = 20, dt = 0.0005 }}]\n{time}\n"
         );
         let path = Path::new("w.toml");
         let setup = Scenario::parse(&text, path)
@@ -159,5 +183,20 @@ mod tests {
             "{w:?}"
         );
         assert!(rest(0.0).is_empty());
+        // The tenth-last step ends at 0.0055 s: from 0.0051 s ten steps
+        // remain, from 0.0056 s nine (issue 35: not warned about).
+        assert!(rest(0.0051).is_empty());
+        let w = rest(0.0056);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].contains("fewer than the 10 steps") && w[0].contains("never"),
+            "{w:?}"
+        );
+        // With adaptive steps the count is not known: not judged.
+        let adaptive = warned_with(
+            "",
+            "adaptive = true\nrest = { speed = 1e-4, after = 0.0056 }",
+        );
+        assert!(adaptive.is_empty(), "{adaptive:?}");
     }
 }
