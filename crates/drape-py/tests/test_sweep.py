@@ -272,3 +272,29 @@ def test_the_progress_bar_is_drawn_on_a_terminal_only(tmp_path):
     bar.close()
     text = shown.getvalue()
     assert "2/4 cases, 1 failed" in text and "left" in text and text.endswith("\n")
+
+
+def test_a_case_held_by_another_process_is_left_to_it(tmp_path):
+    """Issue 34: a case's directory is locked before anything in it is
+    touched. With case 0000 held by another process (here this test, as
+    a second sweep into the same directory would hold it), the sweep
+    leaves it alone — its row failed, saying why, no scenario written
+    into it — and runs the others; once it is released, running the
+    sweep again completes it."""
+    from drape._case import lock_case
+
+    sweep = make_sweep(tmp_path, 'base = "base.toml"\n[parameters]\n"material.density" = [300.0, 320.0]\n')
+    out = tmp_path / "out"
+    held = lock_case(out / "cases" / "0000")
+    assert held is not None
+    try:
+        rows = drape.sweep(sweep, out=out, workers=1, progress=False)
+        assert [r["status"] for r in rows] == ["failed", "completed"]
+        assert "in use by another process" in rows[0]["message"]
+        assert not (out / "cases" / "0000" / "scenario.toml").exists()
+        # Nor can a second holder take it meanwhile.
+        assert lock_case(out / "cases" / "0000") is None
+    finally:
+        os.close(held)
+    rows = drape.sweep(sweep, out=out, workers=1, progress=False)
+    assert [r["status"] for r in rows] == ["completed", "completed"]

@@ -11,6 +11,7 @@ does not start (:data:`_stop`, set by the driver).
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import json
 import os
 import signal
@@ -73,6 +74,23 @@ def brief(summary: Optional[Dict[str, Any]]) -> Optional[Dict[str, Any]]:
     return None if summary is None else {k: summary.get(k) for k in KEPT}
 
 
+def lock_case(case_dir: Path) -> Optional[int]:
+    """Takes the case's lock, ``cases/NNNN.lock`` beside its directory
+    (inside it, drape would refuse it as a file of someone else's), before
+    anything in the directory is touched: the open file descriptor, held
+    until it is closed (or the process dies), or None when another process
+    holds it — a second sweep into the same directory, whose cases would
+    otherwise overwrite each other's ``scenario.toml`` (issue 34)."""
+    case_dir.parent.mkdir(parents=True, exist_ok=True)
+    fd = os.open(case_dir.parent / f"{case_dir.name}.lock", os.O_CREAT | os.O_RDWR, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        return None
+    return fd
+
+
 def run_case(task: Dict[str, Any]) -> Dict[str, Any]:
     """Runs one case; returns its outcome: ``index``, ``status``
     (``completed``, ``failed``, ``interrupted``), ``message``, ``summary``.
@@ -95,6 +113,22 @@ def run_case(task: Dict[str, Any]) -> Dict[str, Any]:
     if _stop is not None and _stop.is_set():
         return outcome("interrupted", "not started: the sweep was interrupted", None)
     case_dir = Path(task["dir"])
+    lock = lock_case(case_dir)
+    if lock is None:
+        return outcome(
+            "failed",
+            f"{case_dir} is in use by another process (another sweep into the same directory?): "
+            "the case was left to it; run this sweep again once it has finished",
+            None,
+        )
+    try:
+        return _run_locked(task, case_dir, outcome)
+    finally:
+        os.close(lock)
+
+
+def _run_locked(task: Dict[str, Any], case_dir: Path, outcome: Any) -> Dict[str, Any]:
+    """:func:`run_case` once the case's lock is held."""
     text = task["text"]
     case_dir.mkdir(parents=True, exist_ok=True)
     scenario = case_dir / "scenario.toml"
