@@ -298,3 +298,48 @@ def test_a_case_held_by_another_process_is_left_to_it(tmp_path):
         os.close(held)
     rows = drape.sweep(sweep, out=out, workers=1, progress=False)
     assert [r["status"] for r in rows] == ["completed", "completed"]
+
+
+def _spawned_workers(driver_pid: int) -> list[int]:
+    """The pids of a local sweep's pool workers: the driver's children
+    started by multiprocessing's spawn (not its resource tracker)."""
+    pids = []
+    for task in Path(f"/proc/{driver_pid}/task").iterdir():
+        for child in (task / "children").read_text().split():
+            cmdline = Path(f"/proc/{child}/cmdline").read_bytes().replace(b"\0", b" ")
+            if b"spawn_main" in cmdline:
+                pids.append(int(child))
+    return pids
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="needs Linux's /proc")
+def test_a_killed_worker_fails_no_other_case(tmp_path):
+    """Issue 34: a local worker killed (SIGKILL, as by the OOM killer)
+    while it runs a case broke the whole pool, and every row said
+    BrokenProcessPool. Now the cases the pool broke on run again on a
+    fresh pool (and one that kills its worker again, alone, fails alone):
+    every case completes and the sweep exits 0."""
+    base = pedestal(**{"time.segments": [{"steps": 10, "dt": 0.01}, {"steps": 200, "dt": 1.0e-4}]})
+    sweep = make_sweep(tmp_path, SLOW, base)
+    out = tmp_path / "out"
+    driver = start_sweep(sweep, out)
+    deadline = time.monotonic() + 120
+    killed = None
+    try:
+        while killed is None:
+            assert driver.poll() is None, "the sweep ended before a worker was killed"
+            assert time.monotonic() < deadline
+            if (out / "cases" / "0000" / "history.csv").is_file():
+                workers = _spawned_workers(driver.pid)
+                if workers:
+                    os.kill(workers[0], signal.SIGKILL)
+                    killed = workers[0]
+            time.sleep(0.01)
+        stdout, stderr = driver.communicate(timeout=240)
+    finally:
+        if driver.poll() is None:
+            os.killpg(driver.pid, signal.SIGKILL)
+            driver.communicate()
+    assert driver.returncode == 0, stderr
+    rows = read_csv(out / "results.csv")
+    assert [r["status"] for r in rows] == ["completed"] * 6, [r["message"] for r in rows]

@@ -22,6 +22,7 @@ import multiprocessing
 import os
 import signal
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Callable, Dict, Iterator, List, Optional
 
 from ._case import init_local_worker, run_case
@@ -72,9 +73,29 @@ def local(tasks: List[Dict[str, Any]], workers: int, address: Optional[str]) -> 
     The processes are started by ``spawn``, not ``fork``: a forked copy of
     a process that has run drape would inherit its thread pools without
     their threads.
+
+    A worker that dies (the OOM killer, a crash, SIGKILL) breaks the pool:
+    every case it had not finished ends with ``BrokenProcessPool``, whoever
+    ran it. Those cases run again on a fresh pool; cases that break that
+    one too run one by one, each on a pool of its own, so that a case that
+    kills its worker fails alone and the others complete (issue 34).
     """
     context = multiprocessing.get_context("spawn")
     stop = context.Event()
+    broken = yield from _local_round(tasks, workers, context, stop)
+    if broken:
+        broken = yield from _local_round(broken, workers, context, stop)
+    for task in broken:
+        alone = yield from _local_round([task], 1, context, stop)
+        for t in alone:
+            yield _failed(t, BrokenProcessPool("its worker died (killed, or out of memory) twice, the second time running this case alone"))
+
+
+def _local_round(tasks: List[Dict[str, Any]], workers: int, context: Any, stop: Any) -> Iterator[Dict[str, Any]]:
+    """Runs ``tasks`` on one pool, yielding their outcomes; returns the tasks
+    the pool broke on (a worker died) without running them to the end."""
+    if not tasks:
+        return []
     pool = ProcessPoolExecutor(
         max_workers=max(1, min(workers, len(tasks))),
         mp_context=context,
@@ -83,13 +104,17 @@ def local(tasks: List[Dict[str, Any]], workers: int, address: Optional[str]) -> 
     )
     futures: Dict[Future, Dict[str, Any]] = {pool.submit(run_case, task): task for task in tasks}
     pending = set(futures)
+    broken: List[Dict[str, Any]] = []
     interrupted = False
     try:
         while pending:
             done, pending = wait(pending, return_when=FIRST_COMPLETED)
             for future in done:
                 error = future.exception()
-                yield _failed(futures[future], error) if error is not None else future.result()
+                if isinstance(error, BrokenProcessPool):
+                    broken.append(futures[future])
+                else:
+                    yield _failed(futures[future], error) if error is not None else future.result()
     except BaseException:
         interrupted = True
         stop.set()
@@ -107,6 +132,8 @@ def local(tasks: List[Dict[str, Any]], workers: int, address: Optional[str]) -> 
         raise
     finally:
         pool.shutdown(wait=True, cancel_futures=interrupted)
+    broken.sort(key=lambda t: t["index"])
+    return broken
 
 
 def ray_engine(tasks: List[Dict[str, Any]], workers: int, address: Optional[str]) -> Iterator[Dict[str, Any]]:
