@@ -281,6 +281,25 @@ pub struct Bending {
 /// Patches per parallel task: enough work to outweigh a task's hand-off.
 const CHUNK: usize = 256;
 
+/// Why a patch's nodes admit no unique quadratic surface, from the nodes
+/// opposite its triangle's edges: two of them the same node — an interior
+/// node with only three neighbours, as where a triangle was split at its
+/// centroid — leaves the patch five distinct nodes, or fewer (issue 35:
+/// the message said six nodes lay on a conic); else six on a conic.
+fn conic_reason(opposite: [Option<usize>; 3]) -> String {
+    let given: Vec<usize> = opposite.iter().flatten().copied().collect();
+    let repeated = given
+        .iter()
+        .enumerate()
+        .find_map(|(i, a)| given[i + 1..].contains(a).then_some(*a));
+    match repeated {
+        Some(node) => format!(
+            "the nodes opposite two of its edges are one and the same, node {node}: the vertex between those edges is an interior node with only three neighbours (as where a triangle was split at its centroid), and the patch has fewer than the six distinct nodes a quadratic surface needs; remesh this region or flip an edge there"
+        ),
+        None => "its six nodes lie on a conic, so no quadratic surface passes through them uniquely; remesh this region".into(),
+    }
+}
+
 impl Bending {
     /// The patches of `mesh` for `rigidity`, fitted on the mesh's
     /// (reference) positions.
@@ -310,7 +329,7 @@ impl Bending {
                     },
                     PatchError::Conic => BendingError::Patch {
                         element,
-                        reason: "its six nodes lie on a conic, so no quadratic surface passes through them uniquely; remesh this region".into(),
+                        reason: conic_reason(opposite[t]),
                     },
                 }
             })?;
@@ -485,6 +504,37 @@ mod tests {
     use super::*;
     use crate::mesh::ElementOrder;
     use crate::mesh::generate::{Pattern, rectangle};
+
+    /// A triangle of a 3 x 3 grid split at its centroid (node 16, with
+    /// three neighbours): the patch of a sub-triangle finds the same node
+    /// opposite two of its edges, and the error says so, naming it (issue
+    /// 35: it said that six nodes lay on a conic).
+    #[test]
+    fn a_node_with_three_neighbours_is_named() {
+        let mut mesh = rectangle(
+            [0.3, 0.3],
+            [3, 3],
+            Pattern::Right,
+            [0.0; 3],
+            ElementOrder::Linear,
+        );
+        // Split the middle square's first triangle at its centroid.
+        let e = 8;
+        let [a, b, c] = [0, 1, 2].map(|k| mesh.connectivity[3 * e + k]);
+        let g = mesh.nodes.len();
+        let centroid =
+            [0, 1, 2].map(|i| (mesh.nodes[a][i] + mesh.nodes[b][i] + mesh.nodes[c][i]) / 3.0);
+        mesh.nodes.push(centroid);
+        mesh.connectivity[3 * e..3 * e + 3].copy_from_slice(&[a, b, g]);
+        mesh.connectivity.extend_from_slice(&[b, c, g, c, a, g]);
+        let e = Bending::new(&mesh, BendingRigidity::Isotropic(2e-5)).unwrap_err();
+        let text = e.to_string();
+        assert!(
+            text.contains("an interior node with only three neighbours")
+                && !text.contains("six nodes lie on a conic"),
+            "{text}"
+        );
+    }
 
     /// The stencils found from the topology alone are the patches' own,
     /// in order, for every element order (node sets: the order inside a
