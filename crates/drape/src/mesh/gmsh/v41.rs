@@ -174,6 +174,19 @@ impl<'a> Reader<'a> {
                     || format!("node tag {} of {n} in block {}", i + 1, b + 1),
                     fields,
                 )?;
+                if fields.len() == 3 + extra {
+                    // A line of coordinates where a tag was due: the block
+                    // holds fewer nodes than its header says (issue 35:
+                    // "expected 1 number for a node tag, found 3").
+                    return Err(self.syntax(
+                        at,
+                        format!(
+                            "node block {} declares {n} nodes in its header, but after {i} node tags comes a line of {} numbers, coordinates by the look of it: the block holds fewer nodes than it declares",
+                            b + 1,
+                            fields.len()
+                        ),
+                    ));
+                }
                 self.expect_fields(fields, 1, "a node tag", at)?;
                 tags.push(self.parse_u64(self.field(fields, 0, at)?, "a node tag", at)?);
             }
@@ -294,6 +307,21 @@ mod tests {
     use crate::mesh::ElementOrder;
     use crate::mesh::gmsh::fixtures::*;
     use crate::mesh::gmsh::parse_msh;
+
+    /// A node block whose header declares more nodes than it lists is
+    /// refused naming the block, the count and what came instead of a
+    /// tag (issue 35: "expected 1 number for a node tag, found 3").
+    #[test]
+    fn a_node_block_declaring_too_many_nodes_is_named() {
+        let text = V41_T3.replace("0 1 0 2\n1\n2\n0 0 0", "0 1 0 3\n1\n2\n0 0 0");
+        let e = parse(&text).unwrap_err().to_string();
+        assert!(
+            e.contains("node block 1 declares 3 nodes")
+                && e.contains("after 2 node tags")
+                && e.contains("line 25"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn v41_ascii_t3_with_entities_and_parametric_nodes() {
