@@ -353,7 +353,6 @@ impl LinearSolver {
     ) -> Result<Option<Factorization>, LinearSolveError> {
         self.last_krylov_iterations = 0;
         self.last_used = None;
-        self.load_rhs(rhs);
         let n = self.dimension();
         let used = if self.uses_multigrid() {
             self.solve_multigrid(values, true, rhs)
@@ -362,7 +361,7 @@ impl LinearSolver {
             && self.node_graph.is_some()
         {
             let solved = self
-                .solve_block_lu_spd(values, rhs)
+                .solve_block_lu_checked(values, true, rhs, true)
                 .map_err(|f| f.of(Matrix::Hessian))?;
             solved.then_some(Factorization::BlockLu)
         } else {
@@ -386,14 +385,6 @@ impl LinearSolver {
             .map_err(|f| f.of(Matrix::Hessian))?;
         self.last_used = Some(used);
         Ok(Some(used))
-    }
-
-    /// The node-block `L D L^T` of a matrix that should be positive
-    /// definite, solved for `b` into `self.rhs`: `Ok(false)` when a pivot
-    /// block is singular or not positive definite, or the refined
-    /// residual is above `1e-10 |b|`.
-    fn solve_block_lu_spd(&mut self, values: &[f64], b: &[f64]) -> Result<bool, SolveFailure> {
-        self.solve_block_lu_checked(values, true, b, true)
     }
 
     /// [`LinearSolver::solve`], for any matrix: why it failed.
@@ -499,8 +490,9 @@ impl LinearSolver {
         self.solve_block_lu_checked(values, symmetric, b, false)
     }
 
-    /// [`LinearSolver::solve_block_lu`]; with `positive`, also `Ok(false)`
-    /// when a pivot block is not positive definite.
+    /// [`LinearSolver::solve_block_lu`]; with `positive` (a matrix that
+    /// should be positive definite), also `Ok(false)` when a pivot block
+    /// is not positive definite.
     fn solve_block_lu_checked(
         &mut self,
         values: &[f64],
