@@ -183,22 +183,22 @@ impl NewtonSystem for StepSystem<'_> {
     }
 }
 
-/// The fabric's strain energy at a step's solution, by part (J): the
-/// membrane's and the bending's (0 without bending); and what friction
-/// dissipated over the step.
+/// The energies of a step's solution (J): the fabric's strain energy by
+/// part — the membrane's and the bending's (0 without bending) — and
+/// what friction dissipated over the step.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct StrainEnergy {
+pub struct StepEnergies {
     /// The membrane's strain energy (J).
     pub membrane: f64,
     /// The bending energy (J).
     pub bending: f64,
     /// The energy friction dissipated over the step (J; 0 without).
-    pub dissipated: f64,
+    pub friction: f64,
 }
 
-impl StrainEnergy {
-    /// Both parts (J): `history.csv`'s `strain_energy`.
-    pub fn total(&self) -> f64 {
+impl StepEnergies {
+    /// The strain energy, both parts (J): `history.csv`'s `strain_energy`.
+    pub fn strain(&self) -> f64 {
         self.membrane + self.bending
     }
 }
@@ -275,7 +275,7 @@ fn step_potential<'a>(
 /// contact the active-set loop around it. On success `contact` holds the
 /// converged active set, multipliers and refreshed features; on error it is
 /// unchanged. Returns Newton's report (iterations summed over re-solutions)
-/// and the strain energy by part; `f_ext` holds the external forces at the
+/// and the step's energies; `f_ext` holds the external forces at the
 /// solution, or `old_ext` (the step's start's) again after an error, so
 /// that a step cut back starts from them.
 #[allow(clippy::too_many_arguments)]
@@ -290,7 +290,7 @@ pub(crate) fn solve_step(
     f_ext: &mut [f64],
     old_ext: &[f64],
     my: &mut [f64],
-) -> Result<(NewtonReport, StrainEnergy), NewtonError> {
+) -> Result<(NewtonReport, StepEnergies), NewtonError> {
     let saved = contact.clone();
     let mut total: Option<NewtonReport> = None;
     let mut rounds = 0;
@@ -336,10 +336,10 @@ pub(crate) fn solve_step(
             can_project,
         };
         let result = newton::solve(&mut system, y, length, settings, ws);
-        let strain = StrainEnergy {
+        let strain = StepEnergies {
             membrane: system.strain_energy,
             bending: system.bending_energy,
-            dissipated: system.potential.dissipation(),
+            friction: system.potential.dissipation(),
         };
         let active = std::mem::take(&mut system.active);
         drop(system);

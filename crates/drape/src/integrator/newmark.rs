@@ -106,11 +106,9 @@ impl DynamicWorkspace {
 pub struct StepOutcome {
     /// Newton's report.
     pub newton: NewtonReport,
-    /// Strain energy at the end of the step (J): the membrane's and the
-    /// bending's.
-    pub strain_energy: f64,
-    /// The strain energy by part (J).
-    pub strain: super::StrainEnergy,
+    /// The energies at the end of the step: strain by part, friction's
+    /// dissipation over the step.
+    pub energies: super::StepEnergies,
 }
 
 impl Newmark {
@@ -177,7 +175,7 @@ impl Newmark {
             dt: Some(dt),
             ..*settings
         };
-        let (report, strain) = solve_step(
+        let (report, energies) = solve_step(
             model,
             terms,
             &mut state.contact,
@@ -203,11 +201,10 @@ impl Newmark {
         std::mem::swap(&mut state.positions, &mut ws.y);
         state.time = t1;
         state.external_work += work;
-        state.friction_dissipation += strain.dissipated;
+        state.friction_dissipation += energies.friction;
         Ok(StepOutcome {
             newton: report,
-            strain_energy: strain.total(),
-            strain,
+            energies,
         })
     }
 }

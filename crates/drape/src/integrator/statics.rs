@@ -46,7 +46,7 @@ impl StaticStepper {
             time: lambda,
             start: None,
         };
-        let (report, strain) = solve_step(
+        let (report, energies) = solve_step(
             model,
             terms,
             &mut state.contact,
@@ -67,8 +67,7 @@ impl StaticStepper {
         state.external_work += work;
         Ok(StepOutcome {
             newton: report,
-            strain_energy: strain.total(),
-            strain,
+            energies,
         })
     }
 }

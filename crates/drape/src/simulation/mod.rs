@@ -33,7 +33,7 @@ mod start;
 mod summary;
 mod warnings;
 use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
-use crate::integrator::{State, StaticStepper, StrainEnergy};
+use crate::integrator::{State, StaticStepper, StepEnergies};
 use crate::model::Model;
 use crate::output::atomic::write_atomic;
 use crate::output::history::HistoryWriter;
@@ -49,10 +49,6 @@ use std::time::Instant;
 use summary::{Figures, initial_summary, summary, write_summary};
 pub use summary::{Summary, record_failure, record_refused_resume};
 pub use warnings::{MAX_MOTION_PER_STEP, warnings};
-
-/// The stretch below which Saint-Venant–Kirchhoff loses stability in
-/// uniaxial compression ([`crate::material::CRITICAL_STRETCH`]).
-pub const SVK_CRITICAL_STRETCH: f64 = crate::material::CRITICAL_STRETCH;
 
 /// What the observer hears after each converged step.
 #[derive(Debug, Clone, PartialEq)]
@@ -115,7 +111,8 @@ pub enum RunError {
         /// Output directory.
         out: PathBuf,
     },
-    /// Saint-Venant–Kirchhoff driven past its stability limit.
+    /// Saint-Venant–Kirchhoff driven past its stability limit by a step
+    /// that its cut-backs could not keep clear of it.
     #[error(
         "at t = {time:.6e} s element {element} is compressed to a stretch of {stretch:.4}, below 1/sqrt(3) = 0.5774 where Saint-Venant-Kirchhoff loses stability in compression; results past this point would be meaningless. Reduce the compression (damping: beta = 1, gamma = 1.5), or use a wrinkling model. The last state is in {out}"
     )]
@@ -188,8 +185,9 @@ struct StepRecord {
     step: usize,
     dt: f64,
     iterations: usize,
-    /// The strain energy by part.
-    strain: StrainEnergy,
+    /// The strain energy by part (and the step's friction, unused here:
+    /// the state sums it).
+    energies: StepEnergies,
     cutbacks: usize,
     min_stretch: f64,
     contact: Option<ContactReport>,
@@ -264,7 +262,7 @@ impl History<'_> {
             ),
             None => (0.0, 0.0, f64::NAN, 0.0),
         };
-        let strain = r.strain.total();
+        let strain = r.energies.strain();
         let mut row = vec![
             r.step as f64,
             state.time,
@@ -288,8 +286,8 @@ impl History<'_> {
             r.states[0],
             r.states[1],
             r.states[2],
-            r.strain.membrane,
-            r.strain.bending,
+            r.energies.membrane,
+            r.energies.bending,
             state.friction_dissipation,
         ]);
         let path = self.writer.path().to_path_buf();
@@ -559,8 +557,10 @@ impl Stepper<'_, '_> {
     }
 
     /// Books a converged step of size `h` that needed `cutbacks` halvings:
-    /// counters, history row, observer, field frame; then the checks that
-    /// may end the run (material instability, rest).
+    /// counters, history row, observer, field frame; then the rest
+    /// criterion, which may end the run. (A step that crushed an element
+    /// past Saint-Venant–Kirchhoff's stability limit never gets here: the
+    /// step solver refuses it, and it is cut back — `step_failure`.)
     fn record(
         &mut self,
         outcome: &StepOutcome,
@@ -571,7 +571,7 @@ impl Stepper<'_, '_> {
         let model = &self.setup.model;
         let state = &self.state;
         let step = self.counters.step + 1;
-        let ((stretch, element), fractions) = model.stretch_and_states(&state.positions);
+        let ((stretch, _), fractions) = model.stretch_and_states(&state.positions);
         self.last_contact = contact_report(model, state);
         if self.first_step_seconds.is_none() {
             self.first_step_seconds = Some(self.start.elapsed().as_secs_f64() - self.setup_seconds);
@@ -583,7 +583,7 @@ impl Stepper<'_, '_> {
                 step,
                 dt: h,
                 iterations: outcome.newton.iterations,
-                strain: outcome.strain,
+                energies: outcome.energies,
                 cutbacks,
                 min_stretch: stretch,
                 contact: self.last_contact.clone(),
@@ -599,7 +599,7 @@ impl Stepper<'_, '_> {
         if cutbacks > 0 {
             counters.cutback_steps += 1;
         }
-        counters.last_strain = outcome.strain_energy;
+        counters.last_strain = outcome.energies.strain();
         if counters.first_contact_time.is_none()
             && self.last_contact.as_ref().is_some_and(|c| c.active > 0)
         {
@@ -615,7 +615,7 @@ impl Stepper<'_, '_> {
             iterations: outcome.newton.iterations,
             cutbacks,
             kinetic_energy: kinetic,
-            strain_energy: outcome.strain_energy,
+            strain_energy: outcome.energies.strain(),
             external_work: state.external_work,
         });
         counters.since_frame += 1;
@@ -627,16 +627,6 @@ impl Stepper<'_, '_> {
             self.written.push((state.time, step));
             counters.last_written = step;
             counters.since_frame = 0;
-        }
-        // With a wrinkling model compression carries no stress, and the
-        // instability does not exist.
-        if stretch < SVK_CRITICAL_STRETCH && model.material().wrinkle_state([0.0; 3]).is_none() {
-            return Ok(Some(End::Failed(RunError::MaterialInstability {
-                time: state.time,
-                element,
-                stretch,
-                out: self.out.to_path_buf(),
-            })));
         }
         if let Some(watch) = &mut self.rest {
             let at_rest = watch.observe(state.time, fastest_node(&state.velocities));

@@ -9,7 +9,7 @@ use super::summary::Figures;
 use super::{History, RunError, StepRecord, checkpoint_path, contact_report, history_columns};
 use super::{io_err, setup_failure};
 use crate::integrator::newmark::DynamicWorkspace;
-use crate::integrator::{State, StrainEnergy};
+use crate::integrator::{State, StepEnergies};
 use crate::output::history::HistoryWriter;
 use crate::output::pvd::{PvdWriter, frame_relative_path};
 use crate::scenario::{Analysis, InputFile, Setup};
@@ -244,10 +244,10 @@ pub(super) fn fresh<'a>(
         // Set by the first row, below.
         last: Figures::default(),
     };
-    let strain0 = StrainEnergy {
+    let energies0 = StepEnergies {
         membrane: model.strain_energy(&state.positions),
         bending: model.bending().map_or(0.0, |b| b.energy(&state.positions)),
-        dissipated: 0.0,
+        friction: 0.0,
     };
     let (stretch0, fractions0) = model.stretch_and_states(&state.positions);
     let contact0 = contact_report(model, &state);
@@ -257,7 +257,7 @@ pub(super) fn fresh<'a>(
             step: 0,
             dt: 0.0,
             iterations: 0,
-            strain: strain0,
+            energies: energies0,
             cutbacks: 0,
             min_stretch: stretch0.0,
             contact: contact0.clone(),
@@ -266,7 +266,7 @@ pub(super) fn fresh<'a>(
     )?;
     let initial_frame = Snapshot::of(0, &state, contact0.as_ref());
     let counters = Counters {
-        last_strain: strain0.total(),
+        last_strain: energies0.strain(),
         ..Counters::default()
     };
     let controller = step_controller(setup, &counters)
