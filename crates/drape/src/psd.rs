@@ -59,6 +59,17 @@ impl Default for Projector {
     }
 }
 
+/// [`Projector::project`] with this thread's projector, made on the
+/// thread's first projection and kept: the callers (an element loop, a
+/// bending patch loop, the contact pairs, on whichever threads run them)
+/// allocate nothing per stencil or per assembly.
+pub fn project(k: &mut [f64], m: usize, stride: usize) -> bool {
+    thread_local! {
+        static PROJECTOR: std::cell::RefCell<Projector> = std::cell::RefCell::new(Projector::new());
+    }
+    PROJECTOR.with(|p| p.borrow_mut().project(k, m, stride))
+}
+
 impl Projector {
     /// A projector for matrices up to [`MAX_DIM`] x [`MAX_DIM`].
     pub fn new() -> Self {

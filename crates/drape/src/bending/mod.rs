@@ -40,7 +40,6 @@ pub mod patch;
 use crate::element::geometry::AxisError;
 use crate::mesh::Mesh;
 use crate::par::Shared;
-use crate::psd::Projector;
 use crate::solver::SparsePattern;
 use patch::{Patch, PatchError};
 
@@ -416,9 +415,7 @@ impl Bending {
         let want_h = h.is_some();
         let hp = Shared(h.map_or(std::ptr::null_mut(), |h| h.as_mut_ptr()));
         let gp = Shared(g.as_mut_ptr());
-        let work = |(local, projector): &mut (kernel::Local, Option<Projector>),
-                    list: &mut dyn Iterator<Item = usize>|
-         -> f64 {
+        let work = |local: &mut kernel::Local, list: &mut dyn Iterator<Item = usize>| -> f64 {
             let mut x = [[0.0; 3]; kernel::MAX_NODES];
             let mut energy = 0.0;
             for k in list {
@@ -430,9 +427,11 @@ impl Bending {
                 }
                 energy += kernel::evaluate(p, &x[..len], want_h, local);
                 if want_h && project.is_some_and(|flags| nodes.iter().any(|&a| flags[a])) {
-                    let m = 3 * len;
-                    let projector = projector.get_or_insert_with(Projector::new);
-                    projector.project(local.hessian.as_flattened_mut(), m, kernel::MAX_DOFS);
+                    crate::psd::project(
+                        local.hessian.as_flattened_mut(),
+                        3 * len,
+                        kernel::MAX_DOFS,
+                    );
                 }
                 // SAFETY: patches that run at once (of one colour) share no
                 // node, so the gradient entries and Hessian blocks written
@@ -466,17 +465,16 @@ impl Bending {
             energy
         };
         if self.colours.is_empty() {
-            let mut local = (kernel::Local::new(), None);
+            let mut local = kernel::Local::new();
             return work(&mut local, &mut (0..self.patches.len()));
         }
         let mut energy = 0.0;
         for colour in &self.colours {
             let parts: Vec<f64> = colour
                 .par_chunks(CHUNK)
-                .map_init(
-                    || (kernel::Local::new(), None),
-                    |local, chunk| work(local, &mut chunk.iter().copied()),
-                )
+                .map_init(kernel::Local::new, |local, chunk| {
+                    work(local, &mut chunk.iter().copied())
+                })
                 .collect();
             energy += parts.iter().sum::<f64>();
         }

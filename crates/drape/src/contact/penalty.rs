@@ -11,7 +11,6 @@
 //! surface a node carrying a force `F` penetrates by `F / eta`.
 
 use super::{ContactModel, ContactState};
-use crate::psd::Projector;
 use crate::solver::SparsePattern;
 
 /// Where [`ContactModel::add_penalty`] adds its Hessian: the values on
@@ -47,7 +46,6 @@ impl ContactModel {
         let (pairs, _) = self.near_pairs(y, t, state, 0.0, false);
         let mut energy = 0.0;
         let mut h = h;
-        let mut projector = None;
         for (p, _, prox) in pairs {
             let (gap, n, dn) = (prox.gap, prox.normal, prox.normal_derivative);
             energy += 0.5 * stiffness * gap * gap;
@@ -67,9 +65,7 @@ impl ContactModel {
                     stiffness * (n[ij / 3] * n[ij % 3] + gap * dn[ij / 3][ij % 3])
                 });
                 if project.is_some_and(|flags| flags[p]) {
-                    projector
-                        .get_or_insert_with(Projector::new)
-                        .project(&mut k, 3, 3);
+                    crate::psd::project(&mut k, 3, 3);
                 }
                 for i in 0..3 {
                     for j in 0..3 {

@@ -18,7 +18,6 @@ use crate::element::membrane::{
 };
 use crate::load::pressure::add_pressure_force;
 use crate::par::Shared;
-use crate::psd::Projector;
 use rayon::prelude::*;
 
 /// Adds (or, for a block's first element, writes) the element Hessian `k`
@@ -89,8 +88,6 @@ struct Local {
     f: [f64; 3 * MAX_NODES],
     fp: [f64; 3 * MAX_NODES],
     k: [f64; 9 * MAX_NODES * MAX_NODES],
-    /// The element Hessians' projection, made on first use.
-    projector: Option<Projector>,
 }
 
 impl Local {
@@ -100,7 +97,6 @@ impl Local {
             f: [0.0; 3 * MAX_NODES],
             fp: [0.0; 3 * MAX_NODES],
             k: [0.0; 9 * MAX_NODES * MAX_NODES],
-            projector: None,
         }
     }
 }
@@ -205,8 +201,7 @@ impl Model {
                     k,
                 );
                 if want_h && !zero && project.is_some_and(|flags| el.iter().any(|&a| flags[a])) {
-                    let projector = local.projector.get_or_insert_with(Projector::new);
-                    projector.project(&mut local.k[..m * m], m, m);
+                    crate::psd::project(&mut local.k[..m * m], m, m);
                 }
                 // SAFETY: elements that run at once (of one colour, or of
                 // the two halves of a small mesh) share no node, so the
