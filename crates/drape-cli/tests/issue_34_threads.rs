@@ -8,9 +8,9 @@
 
 mod issue_19_support;
 
-use issue_19_support::{DRAPE, falling_sheet, scratch, send, summary, wait_for_history};
+use issue_19_support::{falling_sheet, scratch, send, spawn_run_with, summary, wait_for_history};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, ExitStatus, Stdio};
+use std::process::{Child, ExitStatus};
 use std::time::{Duration, Instant};
 
 /// The repository's root (two folders above this crate).
@@ -21,17 +21,11 @@ fn root() -> PathBuf {
 /// `drape run SCENARIO --out OUT --quiet` with `RAYON_NUM_THREADS =
 /// threads`, started.
 fn spawn_with_threads(scenario: &Path, out: &Path, threads: usize) -> Child {
-    Command::new(DRAPE)
-        .arg("run")
-        .arg(scenario)
-        .arg("--out")
-        .arg(out)
-        .arg("--quiet")
-        .env("RAYON_NUM_THREADS", threads.to_string())
-        .stdin(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn drape")
+    spawn_run_with(
+        scenario,
+        out,
+        &[("RAYON_NUM_THREADS", &threads.to_string())],
+    )
 }
 
 /// Waits for `child`, killing it (and failing the test) after `limit`:

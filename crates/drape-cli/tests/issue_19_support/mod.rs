@@ -81,12 +81,18 @@ pub fn run_into(scenario: &Path, out: &Path) -> Output {
 /// `drape run SCENARIO --out OUT --quiet` started, its standard error
 /// piped.
 pub fn spawn_run(scenario: &Path, out: &Path) -> Child {
+    spawn_run_with(scenario, out, &[])
+}
+
+/// [`spawn_run`] with the environment variables `env` set.
+pub fn spawn_run_with(scenario: &Path, out: &Path, env: &[(&str, &str)]) -> Child {
     Command::new(DRAPE)
         .arg("run")
         .arg(scenario)
         .arg("--out")
         .arg(out)
         .arg("--quiet")
+        .envs(env.iter().copied())
         .stdin(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()

@@ -235,6 +235,19 @@ segments = [{ steps = 1, dt = 1e-2 }]
         (setup, start)
     }
 
+    /// The friction term of [`pressed_patch`] over a 10 ms step from
+    /// `start`, and the contact state it was lagged from.
+    fn lagged<'a>(
+        setup: &'a crate::scenario::Setup,
+        start: &[f64],
+    ) -> (FrictionTerm<'a>, crate::contact::ContactState) {
+        let model = &setup.model;
+        let contact = model.contact().expect("an obstacle");
+        let state = contact.initial_state(start);
+        let term = FrictionTerm::new(contact, model.pattern(), 5.0e4, (start, 0.0, 1e-2), &state);
+        (term, state)
+    }
+
     /// Value, gradient and Hessian against central differences, with the
     /// nodes slipped from their anchors by a spread of amounts: some
     /// below the smoothing slip (viscous), some above (Coulomb), one not
@@ -244,10 +257,7 @@ segments = [{ steps = 1, dt = 1e-2 }]
     fn friction_term_matches_finite_differences() {
         let (setup, start) = pressed_patch();
         let model = &setup.model;
-        let contact = model.contact().expect("an obstacle");
-        let state = contact.initial_state(&start);
-        let mut term =
-            FrictionTerm::new(contact, model.pattern(), 5.0e4, (&start, 0.0, 1e-2), &state);
+        let (mut term, state) = lagged(&setup, &start);
         assert_eq!(term.pairs.len(), 25, "every node in contact");
         // The anchors moved with the plane by 1e-4 m along x.
         let y: Vec<f64> = start
@@ -288,11 +298,7 @@ segments = [{ steps = 1, dt = 1e-2 }]
     #[test]
     fn sliding_friction_is_coulombs_force() {
         let (setup, start) = pressed_patch();
-        let model = &setup.model;
-        let contact = model.contact().expect("an obstacle");
-        let state = contact.initial_state(&start);
-        let mut term =
-            FrictionTerm::new(contact, model.pattern(), 5.0e4, (&start, 0.0, 1e-2), &state);
+        let (mut term, state) = lagged(&setup, &start);
         let len = (1.0f64 + 0.09).sqrt();
         let (nx, nz) = (-0.3 / len, 1.0 / len);
         let lambda = 5.0e4 * 1e-3 * nz;
