@@ -132,6 +132,19 @@ fn a_big_mesh_on_one_thread_does_not_hang() {
     same_history_on_one_and_two_threads(&scenario, &dir, "5,000-element sheet");
 }
 
+/// Multigrid on a mesh of more than 20,000 nodes (where its loops run on
+/// rayon's pool): a sheet of 22,801 nodes held at its edge, `linear =
+/// "iterative"`, three steps. Its damping factor's power iteration summed
+/// by rayon's own reduction, whose order follows the threads, and the
+/// history differed from the second row on.
+#[test]
+fn multigrid_on_a_big_mesh_gives_the_same_history_on_one_and_two_threads() {
+    let dir = scratch("multigrid");
+    let extra = "[[fix]]\nboundary = true\n[solver]\nlinear = \"iterative\"\n[output]\nevery = 100";
+    let scenario = falling_sheet(&dir, [150, 150], 3, extra);
+    same_history_on_one_and_two_threads(&scenario, &dir, "multigrid sheet");
+}
+
 /// SIGINT during a one-thread run of the big sheet ends it as on two
 /// threads: exit 130 (128 + SIGINT), a summary saying "interrupted".
 #[test]

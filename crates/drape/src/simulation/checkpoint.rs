@@ -1,7 +1,7 @@
 //! Checkpoints: the full state of a run in a versioned binary file, to
 //! resume from (`drape run --resume DIR`).
 //!
-//! Format (little-endian), version 5:
+//! Format (little-endian), version 6:
 //!
 //! ```text
 //! magic "DRAPECKP" · version u32 · scenario hash u64
@@ -19,6 +19,11 @@
 //! contact u8 (0/1), then hints (nodes x bodies u32), held (nodes x 2 u32, u32::MAX: none),
 //!        multipliers (nodes f64)
 //! frames u64, then (time f64, step u64) each
+//! the linear solver's kept state (version 6; [`KeptLinear`]):
+//!        multigrid u8 (0: none, 1: counters only, 2: with the matrix it was built from),
+//!          then [values u64 and that many f64], fresh iterations, last iterations, skipped solves (u64 each);
+//!        reuse factor u8 (0: none, 1: of a symmetric matrix, 2: of its symmetric part),
+//!          then values u64 and that many f64
 //! FNV-1a of everything before, u64
 //! ```
 //!
@@ -27,6 +32,9 @@
 //! changed, naming it. A path is kept as the bytes of the operating
 //! system's string (Unix), so that any path survives.
 //!
+//! Version 5 (drape before the kept linear-solver state) is read with
+//! none kept: a `direct` run, which keeps nothing across steps, resumes
+//! bit for bit, an `iterative` or `reuse` one with a fresh preconditioner.
 //! Version 4 (drape before friction) is read with no friction dissipated
 //! and the linear solver's counts 0 (the resumed summary then counts the
 //! session's alone, as before).
@@ -51,11 +59,11 @@ use crate::contact::lagrange::MAX_ACTIVE_SET_ROUNDS;
 use crate::integrator::State;
 use crate::scenario::{Analysis, InputFile, Setup, fnv1a};
 use crate::simulation::schedule::REST_STEPS;
-use crate::solver::LinearStats;
+use crate::solver::{KeptFactor, KeptLinear, KeptMultigrid, LinearStats};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"DRAPECKP";
-const VERSION: u32 = 5;
+const VERSION: u32 = 6;
 
 /// Longest key of an input file (bytes).
 const MAX_KEY_BYTES: usize = 256;
@@ -130,6 +138,10 @@ pub struct Checkpoint {
     pub external_forces: Vec<f64>,
     /// Frames written so far: `(time, step)`.
     pub frames: Vec<(f64, usize)>,
+    /// What the linear solver carries across steps (version 6; none from
+    /// an older checkpoint): a resumed `iterative` or `reuse` run rebuilds
+    /// the same preconditioner from it.
+    pub linear: KeptLinear,
 }
 
 /// A checkpoint that cannot be used.
@@ -207,7 +219,7 @@ struct Expected<'a> {
 }
 
 impl Checkpoint {
-    /// Serialises the checkpoint (as version 5; `inputs: None` as an empty
+    /// Serialises the checkpoint (as version 6; `inputs: None` as an empty
     /// list).
     pub fn to_bytes(&self) -> Vec<u8> {
         let s = &self.state;
@@ -284,6 +296,7 @@ impl Checkpoint {
             b.extend_from_slice(&t.to_le_bytes());
             b.extend_from_slice(&(*step as u64).to_le_bytes());
         }
+        write_kept(&mut b, &self.linear);
         let hash = fnv1a(&b);
         b.extend_from_slice(&hash.to_le_bytes());
         b
@@ -448,6 +461,11 @@ impl Checkpoint {
         let frames = (0..count)
             .map(|_| Ok((r.f64("frame time")?, r.usize("frame step")?)))
             .collect::<Result<_, CheckpointError>>()?;
+        let linear = if version >= 6 {
+            read_kept(&mut r)?
+        } else {
+            KeptLinear::default()
+        };
         if r.remaining() != 0 {
             return Err(invalid(format!("{} trailing bytes", r.remaining())));
         }
@@ -467,6 +485,7 @@ impl Checkpoint {
             },
             external_forces,
             frames,
+            linear,
         };
         ck.check_values()?;
         Ok(ck)
@@ -802,6 +821,77 @@ fn read_inputs(
 }
 
 /// The contact state of `nodes` nodes and `bodies` obstacles.
+/// Appends the linear solver's kept state (the format in the module docs).
+fn write_kept(b: &mut Vec<u8>, kept: &KeptLinear) {
+    let values = |b: &mut Vec<u8>, v: &[f64]| {
+        b.extend_from_slice(&(v.len() as u64).to_le_bytes());
+        for x in v {
+            b.extend_from_slice(&x.to_le_bytes());
+        }
+    };
+    match &kept.multigrid {
+        None => b.push(0),
+        Some(m) => {
+            b.push(if m.built_from.is_some() { 2 } else { 1 });
+            if let Some(v) = &m.built_from {
+                values(b, v);
+            }
+            for n in [m.fresh_iterations, m.last_iterations, m.skip] {
+                b.extend_from_slice(&(n as u64).to_le_bytes());
+            }
+        }
+    }
+    match &kept.factor {
+        None => b.push(0),
+        Some(f) => {
+            b.push(if f.symmetric { 1 } else { 2 });
+            values(b, &f.values);
+        }
+    }
+}
+
+/// Reads what [`write_kept`] wrote; the matrices' lengths are checked
+/// against the solver's pattern when the run restores them.
+fn read_kept(r: &mut Reader) -> Result<KeptLinear, CheckpointError> {
+    let values = |r: &mut Reader, field: &str| -> Result<Vec<f64>, CheckpointError> {
+        let n = r.usize(field)?;
+        let v = r.f64s(n, field)?;
+        refuse(
+            v.iter().all(|x| x.is_finite()),
+            format!("{field}: a value that is not finite"),
+        )?;
+        Ok(v)
+    };
+    let multigrid = match r.u8("multigrid flag")? {
+        0 => None,
+        flag @ (1 | 2) => {
+            let built_from = (flag == 2)
+                .then(|| values(r, "multigrid matrix"))
+                .transpose()?;
+            Some(KeptMultigrid {
+                built_from,
+                fresh_iterations: r.usize("multigrid fresh iterations")?,
+                last_iterations: r.usize("multigrid last iterations")?,
+                skip: r.usize("multigrid skipped solves")?,
+            })
+        }
+        flag => return Err(invalid(format!("multigrid flag {flag} is not 0, 1 or 2"))),
+    };
+    let factor = match r.u8("reuse factor flag")? {
+        0 => None,
+        flag @ (1 | 2) => Some(KeptFactor {
+            values: values(r, "reuse factor matrix")?,
+            symmetric: flag == 1,
+        }),
+        flag => {
+            return Err(invalid(format!(
+                "reuse factor flag {flag} is not 0, 1 or 2"
+            )));
+        }
+    };
+    Ok(KeptLinear { multigrid, factor })
+}
+
 fn read_contact(
     r: &mut Reader,
     nodes: usize,
@@ -965,6 +1055,18 @@ mod tests {
             },
             external_forces: v(4.0),
             frames: vec![(0.0, 0), (0.2, 7)],
+            linear: KeptLinear {
+                multigrid: Some(KeptMultigrid {
+                    built_from: Some(vec![4.0, -1.0, 0.5]),
+                    fresh_iterations: 7,
+                    last_iterations: usize::MAX,
+                    skip: 2,
+                }),
+                factor: contact.then(|| KeptFactor {
+                    values: vec![2.0, 0.25],
+                    symmetric: false,
+                }),
+            },
         }
     }
 
@@ -1026,11 +1128,20 @@ mod tests {
         body
     }
 
-    /// The same file as version 4 wrote it (without the friction
-    /// dissipation), version 3 (without the input files too), version 2
-    /// (without segment, step size and still steps too) or version 1
-    /// (without the persistence too).
-    fn as_version(bytes: &[u8], version: u32) -> Vec<u8> {
+    /// `c` as version 5 wrote it (without the kept linear-solver state),
+    /// version 4 (without the friction dissipation and the linear counts
+    /// too), version 3 (without the input files too), version 2 (without
+    /// segment, step size and still steps too) or version 1 (without the
+    /// persistence too).
+    fn as_version(c: &Checkpoint, version: u32) -> Vec<u8> {
+        let bytes = c.to_bytes();
+        let mut kept = Vec::new();
+        write_kept(&mut kept, &c.linear);
+        let v5 = seal(bytes[..bytes.len() - 8 - kept.len()].to_vec(), 5);
+        if version == 5 {
+            return v5;
+        }
+        let bytes = &v5[..];
         // Version 3: magic, version, scenario hash, then the sizes.
         let inputs = 8 + 4 + 8;
         let count = u64::from_le_bytes(bytes[inputs..inputs + 8].try_into().unwrap());
@@ -1074,23 +1185,27 @@ mod tests {
         seal(old, version)
     }
 
-    /// Version 4 resumes with no friction dissipated; version 3 without
+    /// Version 5 resumes with nothing kept by the linear solver; version 4
+    /// with no friction dissipated; version 3 without
     /// input files (unchecked); versions 1 and 2
     /// with 0 for the adaptive steps' segment and step size and the rest
     /// criterion's still steps (a fixed schedule's values), version 1 with
     /// the persistence 1 (the predictor it was written with).
     #[test]
-    fn reads_versions_1_to_3_with_defaults_for_the_new_fields() {
+    fn reads_versions_1_to_5_with_defaults_for_the_new_fields() {
         let c = sample(true);
-        let bytes = c.to_bytes();
         let mut expected = c.clone();
+        // Version 5: nothing kept by the linear solver.
+        expected.linear = KeptLinear::default();
+        let v5 = Checkpoint::from_bytes(&as_version(&c, 5), 6, 2, 0xdead_beef).unwrap();
+        assert_eq!(v5, expected);
         // Version 4: no friction, none dissipated, no linear counts.
         expected.state.friction_dissipation = 0.0;
         expected.counters.linear = LinearStats::default();
-        let v4 = Checkpoint::from_bytes(&as_version(&bytes, 4), 6, 2, 0xdead_beef).unwrap();
+        let v4 = Checkpoint::from_bytes(&as_version(&c, 4), 6, 2, 0xdead_beef).unwrap();
         assert_eq!(v4, expected);
         expected.inputs = None;
-        let v3 = as_version(&bytes, 3);
+        let v3 = as_version(&c, 3);
         assert_eq!(Checkpoint::recorded_inputs(&v3).unwrap(), None);
         assert_eq!(
             Checkpoint::from_bytes(&v3, 6, 2, 0xdead_beef).unwrap(),
@@ -1099,10 +1214,10 @@ mod tests {
         expected.counters.segment = 0;
         expected.counters.step_size = 0.0;
         expected.counters.still_steps = 0;
-        let v2 = Checkpoint::from_bytes(&as_version(&bytes, 2), 6, 2, 0xdead_beef).unwrap();
+        let v2 = Checkpoint::from_bytes(&as_version(&c, 2), 6, 2, 0xdead_beef).unwrap();
         assert_eq!(v2, expected);
         expected.state.persistence = 1.0;
-        let v1 = Checkpoint::from_bytes(&as_version(&bytes, 1), 6, 2, 0xdead_beef).unwrap();
+        let v1 = Checkpoint::from_bytes(&as_version(&c, 1), 6, 2, 0xdead_beef).unwrap();
         assert_eq!(v1, expected);
     }
 
@@ -1210,11 +1325,11 @@ mod tests {
         // A later version is refused by name.
         let mut later = sample(true).to_bytes();
         later.truncate(later.len() - 8);
-        let later = seal(later, 6);
+        let later = seal(later, 7);
         let e = Checkpoint::from_bytes(&later, 6, 2, 0xdead_beef).unwrap_err();
         assert!(
             e.to_string()
-                .contains("version 6, this drape reads versions 1 to 5"),
+                .contains("version 7, this drape reads versions 1 to 6"),
             "{e}"
         );
     }
@@ -1246,8 +1361,28 @@ mod tests {
             &forge(28, &u32::MAX.to_le_bytes()),
             "input files[0] key of 4294967295 bytes",
         );
-        // The frame count, before the two frames and the checksum.
-        let frames = bytes.len() - 8 - 2 * 16 - 8;
+        // The kept linear-solver state, last before the checksum: the
+        // multigrid flag, its matrix's length and values, its 3 counters;
+        // the factor's flag, length and values.
+        let mut kept = Vec::new();
+        write_kept(&mut kept, &c.linear);
+        let kept_at = bytes.len() - 8 - kept.len();
+        says(&forge(kept_at, &[3]), "multigrid flag 3 is not 0, 1 or 2");
+        says(
+            &forge(kept_at + 1 + 8, &f64::NAN.to_le_bytes()),
+            "multigrid matrix: a value that is not finite",
+        );
+        let factor_at = kept_at + 1 + 8 + 3 * 8 + 3 * 8;
+        says(
+            &forge(factor_at, &[9]),
+            "reuse factor flag 9 is not 0, 1 or 2",
+        );
+        says(
+            &forge(factor_at + 1, &u64::MAX.to_le_bytes()),
+            "truncated in reuse factor matrix",
+        );
+        // The frame count, before the two frames.
+        let frames = kept_at - 2 * 16 - 8;
         says(
             &forge(frames, &(u64::MAX / 2).to_le_bytes()),
             "frame count 9223372036854775807 beyond the file",

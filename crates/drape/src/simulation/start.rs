@@ -175,6 +175,14 @@ pub(super) fn resume<'a>(
     ws.f_ext.copy_from_slice(&ck.external_forces);
     // The summary counts the linear solves of the whole run.
     ws.newton.linear.stats = ck.counters.linear;
+    // The preconditioner kept across steps, made again from the matrix it
+    // was made from: the run goes on as if it had not stopped.
+    if !ws.newton.linear.restore(&ck.linear) {
+        return Err(unusable(CheckpointError::Invalid(
+            "its kept linear-solver state (the matrix a preconditioner was made from) does not fit the scenario's Hessian, or cannot be factorised again".into(),
+        ))
+        .into());
+    }
     let entries = ck
         .frames
         .iter()

@@ -39,6 +39,10 @@ const SWEEPS: usize = 1;
 /// Levels with more rows than this run their loops on all threads.
 const PARALLEL_ROWS: usize = 20_000;
 
+/// Nodes per partial sum of a reduction over the nodes: a fixed run, so
+/// that the sum's order, and its value, do not depend on the threads.
+const SUM_NODES: usize = 4_096;
+
 /// Inverse of a 3x3 block, or the identity if it is singular (a smoother
 /// that skips a node rather than failing).
 fn invert_or_identity(m: &Block) -> Block {
@@ -408,18 +412,32 @@ fn spectral_radius(a: &BlockCsr, d_inv: &[Block]) -> f64 {
         .collect();
     let mut w = vec![0.0; n];
     let parallel = a.rows() > PARALLEL_ROWS;
-    // w <- D^-1 w, returning |w|^2.
+    // w <- D^-1 w, returning |w|^2: summed over fixed runs of
+    // `SUM_NODES` nodes, then the runs' sums in order, so that the result
+    // does not depend on the threads (rayon's own `sum` splits by them).
     let scale = |w: &mut [f64]| -> f64 {
-        let node = |(ws, d): (&mut [f64], &Block)| {
-            let t = mul_vec(d, ws);
-            ws.copy_from_slice(&t);
-            t[0] * t[0] + t[1] * t[1] + t[2] * t[2]
+        let run = |(ws, ds): (&mut [f64], &[Block])| -> f64 {
+            ws.chunks_mut(3)
+                .zip(ds)
+                .map(|(wn, d)| {
+                    let t = mul_vec(d, wn);
+                    wn.copy_from_slice(&t);
+                    t[0] * t[0] + t[1] * t[1] + t[2] * t[2]
+                })
+                .sum()
         };
-        if parallel {
-            w.par_chunks_mut(3).zip(d_inv.par_iter()).map(node).sum()
+        let runs: Vec<f64> = if parallel {
+            w.par_chunks_mut(3 * SUM_NODES)
+                .zip(d_inv.par_chunks(SUM_NODES))
+                .map(run)
+                .collect()
         } else {
-            w.chunks_mut(3).zip(d_inv.iter()).map(node).sum()
-        }
+            w.chunks_mut(3 * SUM_NODES)
+                .zip(d_inv.chunks(SUM_NODES))
+                .map(run)
+                .collect()
+        };
+        runs.iter().sum()
     };
     let mut vnorm = crate::vecn::norm(&v);
     let mut rho = 1.0;

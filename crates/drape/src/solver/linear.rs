@@ -51,6 +51,7 @@ use super::block_lu::BlockLu;
 use super::direct::{self, Cholesky, Lu, Scratch};
 use super::krylov;
 pub use super::linear_error::{LinearSolveError, Matrix, SolveFailure};
+pub use super::precondition::KeptMultigrid;
 use super::precondition::{Preconditioned, Preconditioner, Preconditioners};
 use super::product::{self, Product};
 use crate::vecn::norm;
@@ -187,6 +188,32 @@ pub enum LinearMode {
     Iterative,
 }
 
+/// What a [`LinearSolver`] carries from one time step to the next that
+/// later solutions depend on: in `iterative` (and `auto` above 300,000
+/// unknowns) the multigrid hierarchy, in `reuse` the kept Cholesky factor;
+/// nothing in `direct`, whose every factorisation is fresh. Each is kept as
+/// the matrix it was made from, so that a checkpoint holds it and a
+/// resumed run makes the same preconditioner again
+/// ([`LinearSolver::kept`], [`LinearSolver::restore`]).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct KeptLinear {
+    /// The multigrid path's state, once it has been used.
+    pub multigrid: Option<KeptMultigrid>,
+    /// `reuse`: the matrix (scalar CSC values) whose Cholesky factor — of
+    /// its symmetric part when `symmetric` is false — preconditions GMRES.
+    pub factor: Option<KeptFactor>,
+}
+
+/// The matrix of the factor `reuse` keeps ([`KeptLinear::factor`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeptFactor {
+    /// Scalar CSC values, the pattern's length.
+    pub values: Vec<f64>,
+    /// Whether the matrix was symmetric (factorised itself) or not (its
+    /// symmetric part factorised).
+    pub symmetric: bool,
+}
+
 /// Linear solver bound to one sparsity pattern: the policy of the module
 /// documentation, and the state of every path kept between solves.
 pub struct LinearSolver {
@@ -228,6 +255,8 @@ pub struct LinearSolver {
     blocks_current: bool,
     /// How the last system was solved, if it succeeded.
     last_used: Option<Factorization>,
+    /// `reuse`: the matrix of the kept factor ([`KeptLinear::factor`]).
+    factor_from: Option<KeptFactor>,
 }
 
 impl std::fmt::Debug for LinearSolver {
@@ -286,6 +315,7 @@ impl LinearSolver {
             factor_kept: false,
             blocks_current: false,
             last_used: None,
+            factor_from: None,
         })
     }
 
@@ -369,6 +399,7 @@ impl LinearSolver {
                 .factor_cholesky(values)
                 .map_err(|f| f.of(Matrix::Hessian))?;
             if self.factor_kept {
+                self.record_factor(values, true);
                 self.load_rhs(rhs);
                 self.cholesky
                     .solve_in_place(&mut self.rhs, self.par, &mut self.scratch);
@@ -615,6 +646,7 @@ impl LinearSolver {
         if !self.factor_kept {
             return Ok(None);
         }
+        self.record_factor(values, symmetric);
         if symmetric {
             self.load_rhs(rhs);
             self.cholesky
@@ -675,6 +707,73 @@ impl LinearSolver {
             });
         }
         Ok(())
+    }
+
+    /// `reuse` keeps the Cholesky factor just made of `values` (of its
+    /// symmetric part unless `symmetric`) across steps: records its matrix
+    /// for a checkpoint ([`KeptLinear::factor`]).
+    fn record_factor(&mut self, values: &[f64], symmetric: bool) {
+        if self.mode != LinearMode::Reuse {
+            return;
+        }
+        let kept = self.factor_from.get_or_insert_with(|| KeptFactor {
+            values: Vec::new(),
+            symmetric,
+        });
+        kept.values.clear();
+        kept.values.extend_from_slice(values);
+        kept.symmetric = symmetric;
+    }
+
+    /// What this solver carries across time steps ([`KeptLinear`]), for a
+    /// checkpoint.
+    pub fn kept(&self) -> KeptLinear {
+        KeptLinear {
+            multigrid: self.preconditioners.multigrid.as_ref().map(|m| m.kept()),
+            factor: self.factor_kept.then(|| self.factor_from.clone()).flatten(),
+        }
+    }
+
+    /// Makes again what [`Self::kept`] described (a resumed run): the
+    /// multigrid hierarchy from the matrix it was built from, the `reuse`
+    /// factor from its matrix, the counters as they were; the counts in
+    /// [`Self::stats`] do not change. `false` when a kept matrix does not
+    /// have the pattern's length or cannot be factorised or coarsened
+    /// again.
+    pub fn restore(&mut self, kept: &KeptLinear) -> bool {
+        let nnz = self.pattern.compute_nnz();
+        let fits = |v: &[f64]| v.len() == nnz;
+        if kept
+            .multigrid
+            .as_ref()
+            .and_then(|m| m.built_from.as_deref())
+            .is_some_and(|v| !fits(v))
+            || kept.factor.as_ref().is_some_and(|f| !fits(&f.values))
+        {
+            return false;
+        }
+        let stats = self.stats;
+        let restored = (|| {
+            if let Some(m) = &kept.multigrid {
+                let node_graph = self.node_graph.as_ref();
+                let Some(mg) = self.preconditioners.multigrid(node_graph) else {
+                    return Ok(false);
+                };
+                if !mg.restore(m) {
+                    return Ok(false);
+                }
+            }
+            if let Some(f) = &kept.factor {
+                self.factor_kept = self.factor_symmetric_part(&f.values, f.symmetric)?;
+                if !self.factor_kept {
+                    return Ok(false);
+                }
+                self.factor_from = Some(f.clone());
+            }
+            Ok::<bool, SolveFailure>(true)
+        })();
+        self.stats = stats;
+        restored.unwrap_or(false)
     }
 
     /// Solves `A_old x = b` in place with the factorisation of the last
@@ -1011,6 +1110,46 @@ pub(super) mod tests {
         );
         assert!(residual(&cp, &ri, &v2, &x, &b) < 1e-10);
         assert_eq!(s.stats.cholesky_factorizations, 1);
+    }
+
+    /// `reuse`'s kept factor survives a checkpoint: a solver restored from
+    /// [`LinearSolver::kept`] solves the next system as the one that kept
+    /// it does, bit for bit (a fresh solver factorises that system itself
+    /// and answers in other last bits); its counts do not change, and a
+    /// kept matrix of another length is refused.
+    #[test]
+    fn a_restored_reuse_factor_solves_as_the_kept_one() {
+        let n = 40;
+        let (cp, ri, v) = tridiagonal(n, 0.02);
+        let make = || {
+            LinearSolver::new(&cp, &ri)
+                .unwrap()
+                .with_transpose(transpose(&cp, &ri))
+                .with_mode(LinearMode::Reuse)
+        };
+        let b: Vec<f64> = (0..n).map(|i| (0.7 * i as f64).sin()).collect();
+        let mut kept = make();
+        kept.solve(&v, false, &mut b.clone()).unwrap();
+        let state = kept.kept();
+        assert_eq!(state.factor.as_ref().map(|f| f.symmetric), Some(false));
+        let mut restored = make();
+        assert!(restored.restore(&state));
+        assert_eq!(restored.stats, LinearStats::default());
+        let v2: Vec<f64> = v.iter().map(|a| 1.01 * a).collect();
+        let solve = |s: &mut LinearSolver| {
+            let mut x = b.clone();
+            let used = s.solve(&v2, false, &mut x).unwrap();
+            (used, x)
+        };
+        let (used, x) = solve(&mut kept);
+        assert_eq!(used, Factorization::ReusedFactorGmres);
+        assert_eq!(solve(&mut restored), (used, x.clone()));
+        let (fresh_used, fresh) = solve(&mut make());
+        assert_ne!(fresh_used, used);
+        assert_ne!(fresh, x);
+        let mut short = state.clone();
+        short.factor.as_mut().unwrap().values.pop();
+        assert!(!make().restore(&short));
     }
 
     /// Block-Jacobi CG: the mass solve and the `iterative` mode on a

@@ -19,7 +19,9 @@ pub mod pattern;
 mod precondition;
 mod product;
 
-pub use linear::{Factorization, LinearMode, LinearSolver, LinearStats};
+pub use linear::{
+    Factorization, KeptFactor, KeptLinear, KeptMultigrid, LinearMode, LinearSolver, LinearStats,
+};
 pub use linear_error::{FactorStage, FaerFailure, LinearSolveError, Matrix, SolveFailure};
 pub use newton::{NewtonError, NewtonReport, NewtonSettings};
 pub use pattern::SparsePattern;

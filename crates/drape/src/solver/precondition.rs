@@ -111,6 +111,28 @@ pub(super) struct Multigrid {
     /// (rebuilding for every solve of a problem multigrid cannot handle
     /// would cost more than the fallback itself).
     skip: usize,
+    /// The matrix (scalar CSC values) the hierarchy was last built from:
+    /// with the counters above, all a resumed run needs to rebuild the
+    /// same hierarchy ([`KeptMultigrid`]).
+    built_from: Vec<f64>,
+}
+
+/// What the multigrid path carries from one solve to the next that later
+/// solutions depend on: the matrix its hierarchy was built from and the
+/// counters that decide when it is rebuilt. A checkpoint stores it, so
+/// that a resumed run rebuilds the same hierarchy and goes on bit for bit.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct KeptMultigrid {
+    /// The scalar CSC values the hierarchy was built from; `None` before
+    /// the first hierarchy (or after one could not be built).
+    pub built_from: Option<Vec<f64>>,
+    /// Krylov iterations of the first solve after the last build
+    /// (`usize::MAX` before it).
+    pub fresh_iterations: usize,
+    /// Krylov iterations of the last solve (`usize::MAX`: none, or failed).
+    pub last_iterations: usize,
+    /// Solves still left to the fallback.
+    pub skip: usize,
 }
 
 impl Multigrid {
@@ -143,7 +165,44 @@ impl Multigrid {
             last_iterations: usize::MAX,
             builds: 0,
             skip: 0,
+            built_from: Vec::new(),
         }
+    }
+
+    /// The state a checkpoint keeps ([`KeptMultigrid`]).
+    pub(super) fn kept(&self) -> KeptMultigrid {
+        KeptMultigrid {
+            built_from: self.amg.is_some().then(|| self.built_from.clone()),
+            fresh_iterations: self.fresh_iterations,
+            last_iterations: self.last_iterations,
+            skip: self.skip,
+        }
+    }
+
+    /// Restores a kept state: the hierarchy rebuilt from the matrix it was
+    /// built from (the pattern's scalar values; not counted as a build),
+    /// and the counters. `false` when no hierarchy can be built from it.
+    pub(super) fn restore(&mut self, kept: &KeptMultigrid) -> bool {
+        if let Some(values) = &kept.built_from {
+            let mut finest = match (self.finest.take(), self.amg.take()) {
+                (Some(f), _) => f,
+                (None, Some(amg)) => amg.into_finest(),
+                (None, None) => return false,
+            };
+            Self::gather(&self.source, values, &mut finest.vals);
+            match Amg::new(finest) {
+                Ok(amg) => self.amg = Some(amg),
+                Err(finest) => {
+                    self.finest = Some(finest);
+                    return false;
+                }
+            }
+            self.built_from.clone_from(values);
+        }
+        self.fresh_iterations = kept.fresh_iterations;
+        self.last_iterations = kept.last_iterations;
+        self.skip = kept.skip;
+        true
     }
 
     /// Copies the blocks of the scalar CSC `values` into `blocks`.
@@ -214,6 +273,8 @@ impl Multigrid {
             (None, None) => return false,
         };
         Self::gather(&self.source, values, &mut finest.vals);
+        self.built_from.clear();
+        self.built_from.extend_from_slice(values);
         self.builds += 1;
         *builds += 1;
         self.fresh_iterations = usize::MAX;
