@@ -19,10 +19,13 @@ from test_sweep import make_sweep
 
 
 def rows_without_wall_times(path):
+    """The rows without the columns that describe the machine rather than
+    the case: the wall time, and the threads (a local case has the CPUs
+    shared among the workers, a cluster's task one)."""
     with open(path, newline="") as f:
         rows = list(csv.reader(f))
-    column = rows[0].index("wall_seconds")
-    return [row[:column] + row[column + 1 :] for row in rows]
+    drop = {rows[0].index(column) for column in ("wall_seconds", "threads")}
+    return [[v for i, v in enumerate(row) if i not in drop] for row in rows]
 
 
 @pytest.fixture(scope="module")

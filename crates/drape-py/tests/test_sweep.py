@@ -82,6 +82,7 @@ def test_a_grid_with_an_invalid_value(tmp_path):
         "center_y",
         "center_z",
         "message",
+        "threads",
     ]
     assert [r["case"] for r in rows] == [str(i) for i in range(6)]
     # Grid order: the first parameter varies slowest.
@@ -246,9 +247,17 @@ def test_an_interrupted_sweep_resumes_its_cases(tmp_path):
 
     rows = drape.sweep(sweep, out=out, workers=1, progress=False)
     assert rows[0]["status"] == "completed"
-    straight = drape.run(case / "scenario.toml", out=tmp_path / "straight")
-    assert drape.RunResult(case).summary["monitors"] == straight.summary["monitors"]
-    assert rows[0]["steps"] == straight.summary["steps"]
+    # The same sweep uninterrupted: the same row (but the wall time) and
+    # the same history, byte for byte; each row records its threads.
+    straight = tmp_path / "straight"
+    (uninterrupted,) = drape.sweep(sweep, out=straight, workers=1, progress=False)
+    machine = ("wall_seconds", "threads")
+    assert {k: v for k, v in rows[0].items() if k not in machine} == {
+        k: v for k, v in uninterrupted.items() if k not in machine
+    }
+    assert (case / "history.csv").read_bytes() == (straight / "cases" / "0000" / "history.csv").read_bytes()
+    assert uninterrupted["threads"] == drape.RunResult(straight / "cases" / "0000").summary["threads"] >= 1
+    assert read_csv(straight / "results.csv")[0]["threads"] == str(uninterrupted["threads"])
 
 
 def test_the_progress_bar_is_drawn_on_a_terminal_only(tmp_path):

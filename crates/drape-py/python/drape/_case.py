@@ -23,7 +23,17 @@ from . import _drape
 from ._errors import DrapeError, RunError, ScenarioError
 
 #: The summary's entries a sweep keeps of a case.
-KEPT = ("status", "message", "monitors", "steps", "time", "newton_iterations", "wall_seconds", "first_contact_time")
+KEPT = (
+    "status",
+    "message",
+    "monitors",
+    "steps",
+    "time",
+    "newton_iterations",
+    "wall_seconds",
+    "first_contact_time",
+    "threads",
+)
 
 #: Set by a local sweep's driver when it is interrupted (an Event shared
 #: with the pool's processes), None elsewhere.

@@ -345,6 +345,9 @@ def _row(
         for axis, c in zip("xyz", range(3)):
             row[f"{name}_{axis}"] = position[c] if position else None
     row["message"] = _relative(message, out)
+    # Last, after the columns SPEC §5 lists: the threads the case ran on
+    # (its results do not depend on them).
+    row["threads"] = summary.get("threads")
     return row
 
 
@@ -360,7 +363,7 @@ def _columns(plan: Plan, rows: Sequence[Dict[str, Any]]) -> List[str]:
             if column.endswith("_x") and column[:-2] not in names and column not in columns:
                 names.append(column[:-2])
     columns += [f"{n}_{a}" for n in names for a in "xyz"]
-    return columns + ["message"]
+    return columns + ["message", "threads"]
 
 
 def _cell(value: Any) -> str:

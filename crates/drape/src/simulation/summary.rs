@@ -60,6 +60,12 @@ pub struct Summary {
     /// it also builds what the linear solver keeps across steps (symbolic
     /// factorisations, the multigrid hierarchy).
     pub first_step_seconds: f64,
+    /// Threads the run's parallel loops had (rayon's pool:
+    /// `RAYON_NUM_THREADS`, else the CPUs). The results do not depend on
+    /// it (every sum runs in an order the work fixes); it is recorded so
+    /// that a run's times can be read, and a sweep's rows say what each
+    /// case had.
+    pub threads: usize,
     /// Nodes of the mesh.
     pub nodes: usize,
     /// Elements of the mesh.
@@ -214,6 +220,7 @@ pub(super) fn summary(
         output_seconds: 0.0,
         output_thread_seconds: 0.0,
         first_step_seconds: 0.0,
+        threads: rayon::current_num_threads(),
         nodes: model.mesh().node_count(),
         elements: model.mesh().element_count(),
         dofs: model.dofs(),
