@@ -1335,13 +1335,14 @@ const BAD_INPUTS: &[BadInput] = &[
         line: Some(22),
     },
     BadInput {
-        file: "friction_lagrange.toml",
-        fragments: &[
-            "`contact.friction`",
-            "needs method = \"penalty\"",
-            "not implemented yet",
-        ],
-        line: Some(25),
+        file: "stick_speed_lagrange_negative.toml",
+        fragments: &["`contact.stick_speed`", "positive", "-0.001"],
+        line: Some(26),
+    },
+    BadInput {
+        file: "friction_in_material.toml",
+        fragments: &["`material`", "unknown field `friction`"],
+        line: Some(14),
     },
     BadInput {
         file: "negative_penalty.toml",

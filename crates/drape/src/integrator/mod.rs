@@ -222,8 +222,8 @@ pub(crate) struct StepTerms<'a> {
 
 /// The terms of a step's incremental potential, in their order: membrane,
 /// bending (with a bending stiffness), loads, inertia (dynamic), penalty contact (with obstacles and
-/// penalties), friction (penalty contact with a friction coefficient, in a
-/// dynamic step: lagged from `state`, the step's start's contact state).
+/// penalties), friction (a friction coefficient, either contact method, in
+/// a dynamic step: lagged from `state`, the step's start's contact state).
 /// `f_ext` receives the external forces, `my` is scratch.
 fn step_potential<'a>(
     model: &'a Model,
@@ -245,14 +245,14 @@ fn step_potential<'a>(
     if terms.c != 0.0 {
         list.push(Box::new(InertiaTerm::new(model, terms.c, terms.mq, my)));
     }
-    if let Some(contact) = model.contact()
-        && let ContactMethod::Penalty { stiffness } = contact.method
-    {
-        list.push(Box::new(PenaltyTerm::new(
-            contact,
-            model.pattern(),
-            stiffness,
-        )));
+    if let Some(contact) = model.contact() {
+        if let ContactMethod::Penalty { stiffness } = contact.method {
+            list.push(Box::new(PenaltyTerm::new(
+                contact,
+                model.pattern(),
+                stiffness,
+            )));
+        }
         // Friction lags the normal force and the tangent plane of the
         // step's start (the contact state is the step's start's too).
         if contact.has_friction()
@@ -262,7 +262,6 @@ fn step_potential<'a>(
             list.push(Box::new(FrictionTerm::new(
                 contact,
                 model.pattern(),
-                stiffness,
                 lag,
                 state,
             )));
@@ -312,15 +311,15 @@ pub(crate) fn solve_step(
             .contact()
             .is_none_or(|c| c.method != ContactMethod::Lagrange);
     let error = loop {
+        // Every round starts the terms anew (a term that lags does so
+        // from the step's start, each round alike).
         let mut potential = step_potential(model, &terms, saved.as_ref(), &mut *f_ext, &mut *my);
-        if rounds == 0 {
-            let ctx = StepContext {
-                time: terms.time,
-                contact: contact.as_ref(),
-                project: None,
-            };
-            potential.begin_step(&ctx, y);
-        }
+        let ctx = StepContext {
+            time: terms.time,
+            contact: contact.as_ref(),
+            project: None,
+        };
+        potential.begin_step(&ctx, y);
         let mut system = StepSystem {
             model,
             potential,

@@ -56,10 +56,15 @@ fn default_stick_speed() -> f64 {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LagrangeSpec {
-    /// Coulomb's friction coefficient: only 0 (the default) so far with
-    /// multipliers.
+    /// Coulomb's friction coefficient `mu` against every obstacle, >= 0
+    /// and finite, the normal force being the multiplier. Default 0
+    /// (frictionless).
     #[serde(default)]
     pub friction: f64,
+    /// The slip speed (m/s, > 0) below which friction is a stiff viscous
+    /// resistance, as with a penalty. Default 1e-3.
+    #[serde(default = "default_stick_speed")]
+    pub stick_speed: f64,
 }
 
 impl ContactSpec {
@@ -122,24 +127,11 @@ pub(super) fn build_contact(
             friction_of(p.friction)?,
             c.positive(t, None, "stick_speed", p.stick_speed)?,
         ),
-        ContactSpec::Lagrange(l) => {
-            if friction_of(l.friction)? != 0.0 {
-                return Err(c.invalid(
-                    t,
-                    None,
-                    "friction",
-                    format!(
-                        "= {} needs method = \"penalty\" for now: friction with multipliers is not implemented yet",
-                        l.friction
-                    ),
-                ));
-            }
-            (
-                ContactMethod::Lagrange,
-                0.0,
-                crate::contact::DEFAULT_STICK_SPEED,
-            )
-        }
+        ContactSpec::Lagrange(l) => (
+            ContactMethod::Lagrange,
+            friction_of(l.friction)?,
+            c.positive(t, None, "stick_speed", l.stick_speed)?,
+        ),
     };
     let bodies = (s.obstacles.iter().enumerate())
         .map(|(i, o)| build_body(c, i, o, base, inputs))
@@ -153,16 +145,6 @@ pub(super) fn build_contact(
                     Some(i),
                     "friction",
                     format!("must be a finite number >= 0 (Coulomb's coefficient), not {mu}"),
-                ));
-            }
-            Some(mu) if mu > 0.0 && method == ContactMethod::Lagrange => {
-                return Err(c.invalid(
-                    "obstacle",
-                    Some(i),
-                    "friction",
-                    format!(
-                        "= {mu} needs [contact] method = \"penalty\" for now: friction with multipliers is not implemented yet"
-                    ),
                 ));
             }
             mu => mu,

@@ -1,14 +1,19 @@
-//! Coulomb friction against the obstacles, penalty contact: the smoothed,
-//! lagged friction potential of Incremental Potential Contact (Li et al.
-//! 2020, "Incremental Potential Contact", ACM TOG 39(4), §5;
-//! docs/theory.md §1.8).
+//! Coulomb friction against the obstacles: the smoothed, lagged friction
+//! potential of Incremental Potential Contact (Li et al. 2020,
+//! "Incremental Potential Contact", ACM TOG 39(4), §5; docs/theory.md
+//! §1.8), for penalty contact and for multipliers.
 //!
-//! For each node `p` in contact with a body at the start of the step
-//! (`g < 0` at the start positions `x`), the normal force and the tangent
-//! plane are lagged from there:
+//! For each node `p` in contact with a body at the start of the step, the
+//! normal force and the tangent plane are lagged from there: with a
+//! penalty, the nodes inside a body (`g < 0` at the start positions `x`),
+//! pressed by `eta |g|`; with multipliers, the nodes of the active set,
+//! pressed by their multiplier — the normal force the constraint exerted
+//! at the end of the step before (a node that enters the set feels
+//! friction from its second step in contact, as a penalty node that
+//! enters does):
 //!
 //! ```text
-//! lambda_p = eta |g_p(x)|                       normal force (N)
+//! lambda_p = eta |g_p(x)|  or  lambda_p         normal force (N)
 //! T_p      = I - n n^T                          tangent projector, n the normal at x
 //! u_p      = T_p (y_p - x_p - v h)              tangential slip over the step (m),
 //!                                               v the body's velocity
@@ -37,7 +42,7 @@
 //! the step, `mu lambda f1(s) s` a node, is the energy it dissipates.
 
 use super::super::potential::{Stencils, StepContext, StepTerm, TermValue};
-use crate::contact::{ContactModel, ContactState};
+use crate::contact::{ContactMethod, ContactModel, ContactState};
 use crate::solver::SparsePattern;
 
 /// A node in contact at the start of the step, with what is lagged.
@@ -64,30 +69,45 @@ pub struct FrictionTerm<'a> {
 }
 
 impl<'a> FrictionTerm<'a> {
-    /// The friction of `contact` (penalty `stiffness`, N/m) over the step
-    /// of size `dt` from positions `start` at time `t0`, whose contact
-    /// state is `state`: the pairs in contact at the start, lagged.
+    /// The friction of `contact` over the step of size `dt` from positions
+    /// `start` at time `t0`, whose contact state is `state`: the pairs in
+    /// contact at the start, lagged (the module docs: penalty pairs by
+    /// their depth, multipliers' by the multiplier `state` holds).
     pub fn new(
         contact: &ContactModel,
         pattern: &'a SparsePattern,
-        stiffness: f64,
         (start, t0, dt): (&[f64], f64, f64),
         state: &ContactState,
     ) -> Self {
-        let (near, _) = contact.near_pairs(start, t0, state, 0.0, false);
-        let pairs = near
-            .into_iter()
-            .filter(|&(_, k, _)| contact.friction_of(k) > 0.0)
-            .map(|(p, k, prox)| {
-                let v = contact.bodies[k].velocity;
-                Lagged {
-                    node: p,
-                    force: contact.friction_of(k) * stiffness * (-prox.gap),
-                    normal: prox.normal,
-                    anchor: std::array::from_fn(|i| start[3 * p + i] + v[i] * dt),
-                }
-            })
-            .collect();
+        let lagged = |p: usize, k: usize, lambda: f64, normal: [f64; 3]| {
+            let v = contact.bodies[k].velocity;
+            Lagged {
+                node: p,
+                force: contact.friction_of(k) * lambda,
+                normal,
+                anchor: std::array::from_fn(|i| start[3 * p + i] + v[i] * dt),
+            }
+        };
+        let pairs = match contact.method {
+            ContactMethod::Penalty { stiffness } => {
+                let (near, _) = contact.near_pairs(start, t0, state, 0.0, false);
+                near.into_iter()
+                    .filter(|&(_, k, _)| contact.friction_of(k) > 0.0)
+                    .map(|(p, k, prox)| lagged(p, k, stiffness * (-prox.gap), prox.normal))
+                    .collect()
+            }
+            ContactMethod::Lagrange => (state.active.iter().enumerate())
+                .filter_map(|(p, held)| {
+                    let (k, face) = (*held)?;
+                    let (k, lambda) = (k as usize, state.multipliers[p]);
+                    (contact.friction_of(k) > 0.0 && lambda > 0.0).then(|| {
+                        let x = [start[3 * p], start[3 * p + 1], start[3 * p + 2]];
+                        let (prox, _) = contact.bodies[k].constraint(x, t0, face);
+                        lagged(p, k, lambda, prox.normal)
+                    })
+                })
+                .collect(),
+        };
         Self {
             pattern,
             pairs,
@@ -198,7 +218,23 @@ mod tests {
     /// plane tilted about y, moving along x at 1 cm/s, with friction 0.4 and a slip speed of 1e-3 m/s, over a
     /// step of 10 ms from its start: the smoothing slip is 1e-5 m.
     fn pressed_patch() -> (crate::scenario::Setup, Vec<f64>) {
-        let text = r#"
+        let text = PRESSED;
+        let path = Path::new("friction.toml");
+        let setup = Scenario::parse(text, path)
+            .and_then(|s| s.build(path, text))
+            .expect("a valid scenario");
+        // Every node 1 mm below the tilted plane.
+        let start = setup
+            .model
+            .initial_positions()
+            .chunks(3)
+            .flat_map(|x| [x[0], x[1], -0.1 + 0.3 * x[0] - 1e-3])
+            .collect();
+        (setup, start)
+    }
+
+    /// The scenario of [`pressed_patch`].
+    const PRESSED: &str = r#"
 [mesh]
 shape = "rectangle"
 size = [0.1, 0.1]
@@ -221,19 +257,6 @@ stick_speed = 1.0e-3
 [time]
 segments = [{ steps = 1, dt = 1e-2 }]
 "#;
-        let path = Path::new("friction.toml");
-        let setup = Scenario::parse(text, path)
-            .and_then(|s| s.build(path, text))
-            .expect("a valid scenario");
-        // Every node 1 mm below the tilted plane.
-        let start = setup
-            .model
-            .initial_positions()
-            .chunks(3)
-            .flat_map(|x| [x[0], x[1], -0.1 + 0.3 * x[0] - 1e-3])
-            .collect();
-        (setup, start)
-    }
 
     /// The friction term of [`pressed_patch`] over a 10 ms step from
     /// `start`, and the contact state it was lagged from.
@@ -244,7 +267,7 @@ segments = [{ steps = 1, dt = 1e-2 }]
         let model = &setup.model;
         let contact = model.contact().expect("an obstacle");
         let state = contact.initial_state(start);
-        let term = FrictionTerm::new(contact, model.pattern(), 5.0e4, (start, 0.0, 1e-2), &state);
+        let term = FrictionTerm::new(contact, model.pattern(), (start, 0.0, 1e-2), &state);
         (term, state)
     }
 
@@ -290,6 +313,43 @@ segments = [{ steps = 1, dt = 1e-2 }]
         let mut g = vec![0.0; y.len()];
         term.add(&ctx, &y, &mut g, None);
         assert!(term.dissipated() > 0.0);
+    }
+
+    /// With multipliers the lagged normal force is the multiplier of the
+    /// step before, on the nodes of the active set only (a node of the
+    /// set whose multiplier is 0 feels none), and the tangent plane the
+    /// face the node is held on: each pair's `mu lambda`, its normal the
+    /// plane's.
+    #[test]
+    fn with_multipliers_the_normal_force_is_the_multiplier() {
+        let (_, start) = pressed_patch();
+        let lagrange = r#"method = "lagrange""#;
+        let text = PRESSED.replace("method = \"penalty\"\npenalty = 5.0e4", lagrange);
+        assert!(text.contains(lagrange));
+        let path = Path::new("friction-lagrange.toml");
+        let setup = Scenario::parse(&text, path)
+            .and_then(|s| s.build(path, &text))
+            .expect("a valid scenario");
+        let model = &setup.model;
+        let contact = model.contact().expect("an obstacle");
+        let mut state = contact.initial_state(&start);
+        for (p, lambda) in [(3, 0.25), (7, 0.0), (12, 1.5)] {
+            let x = [start[3 * p], start[3 * p + 1], start[3 * p + 2]];
+            let face = contact.bodies[0].proximity(x, 0.0, None).feature;
+            state.active[p] = Some((0, face));
+            state.multipliers[p] = lambda;
+        }
+        let term = FrictionTerm::new(contact, model.pattern(), (&start, 0.0, 1e-2), &state);
+        let len = (1.0f64 + 0.09).sqrt();
+        let normal = [-0.3 / len, 0.0, 1.0 / len];
+        let pairs: Vec<(usize, f64)> = term.pairs.iter().map(|l| (l.node, l.force)).collect();
+        assert_eq!(pairs, [(3, 0.4 * 0.25), (12, 0.4 * 1.5)]);
+        for pair in &term.pairs {
+            let off = (0..3)
+                .map(|i| (pair.normal[i] - normal[i]).abs())
+                .fold(0.0, f64::max);
+            assert!(off < 1e-15, "normal {:?}", pair.normal);
+        }
     }
 
     /// Sliding well above the smoothing slip, each node's friction force
