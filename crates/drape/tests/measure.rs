@@ -658,6 +658,15 @@ fn a_wider_base_below_the_pedestal_is_not_taken_for_it() {
     let b = measure::measure(&surface(&disc, &y), &with_base).unwrap();
     assert_eq!(a.drape_coefficient, b.drape_coefficient);
     assert!(a.drape_coefficient > 0.1 && a.drape_coefficient < 0.9);
+    // A top disc of the pedestal's radius gripping the specimen (its
+    // bottom 2 µm into the fabric, its top 2 cm above), listed after the
+    // pedestal, is not the pedestal either (issue 32: it was taken for
+    // it, its top being the highest).
+    let top_disc = "[[obstacle]]\nshape = \"cylinder\"\ncenter = [0.0, 0.0, 0.02]\naxis = [0.0, 0.0, 1.0]\nradius = 0.09\nheight = 0.020002";
+    let gripped = find(&format!("{CYLINDER}\n{top_disc}")).unwrap();
+    assert_eq!(gripped.pedestal_source, "obstacle[0]");
+    let c = measure::measure(&surface(&disc, &y), &gripped).unwrap();
+    assert_eq!(a.drape_coefficient, c.drape_coefficient);
     let beside = CYLINDER.replace("radius = 0.09", "radius = 0.1");
     let e = find(&format!("{CYLINDER}\n{beside}"))
         .unwrap_err()

@@ -11,7 +11,10 @@
 //!   velocity to the frame's time; of several, the one whose top face is
 //!   highest — the one the specimen comes to rest on (a wider base
 //!   cylinder below the pedestal is not it, whatever its place in the
-//!   list). Two under the specimen with their tops at one height and
+//!   list). A cylinder whose top face is above the specimen's initial
+//!   plane (beyond [`ABOVE_TOLERANCE`] of the rim's reach) is not under
+//!   it: the top disc that grips the specimen on the pedestal, as in the
+//!   instrument. Two under the specimen with their tops at one height and
 //!   different radii are ambiguous: an error that asks for the radius.
 //!   Its radius is `r_p`, its axis the centre of the measurement.
 //! - **Specimen**: the `radius` of a `[mesh] shape = "disc"` (which must
@@ -39,6 +42,13 @@ pub const RIM_TOLERANCE: f64 = 0.02;
 /// Tops of two cylinders closer than this fraction of the specimen's
 /// reach are at one height.
 const TOP_TIE: f64 = 1e-9;
+
+/// A cylinder whose top face is above the specimen's initial plane by
+/// more than this fraction of the specimen's reach is above it, not under
+/// it (a top disc): 1e-3, 0.15 mm for a 30 cm specimen — a top disc
+/// pressing into the fabric by a few micrometres still counts as above,
+/// a pedestal the fabric starts on as under.
+pub const ABOVE_TOLERANCE: f64 = 1e-3;
 
 /// Radii given instead of found (m).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -229,6 +239,10 @@ fn find_pedestal(
         }
         // The top face's height (`center` is the top face's centre).
         let top = vec3::dot(moved, up.vertical());
+        if top > vec3::dot(rim_center, up.vertical()) + ABOVE_TOLERANCE * reach {
+            // Above the specimen: a top disc.
+            continue;
+        }
         let pedestal = Pedestal {
             index,
             axis_point: moved,
