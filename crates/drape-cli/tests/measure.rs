@@ -47,8 +47,8 @@ fn example(name: &str) -> String {
     std::fs::read_to_string(path).unwrap()
 }
 
-/// `text` cut to 3 fixed steps of 10 ms (first contact is at 0.1 s: the
-/// fabric is still flat), a frame each.
+/// `text` cut to 3 fixed steps of 1 ms (the drape tester's skirt has
+/// barely started to drop), a frame each.
 fn three_steps(text: &str) -> String {
     text.lines()
         .filter(|l| {
@@ -58,7 +58,7 @@ fn three_steps(text: &str) -> String {
         })
         .map(|l| {
             if l.starts_with("segments") {
-                "segments = [ { steps = 3, dt = 0.01 } ]".to_owned()
+                "segments = [ { steps = 3, dt = 1.0e-3 } ]".to_owned()
             } else if l.starts_with("every =") {
                 "every = 1".to_owned()
             } else {
@@ -120,10 +120,19 @@ fn refused(args: &[&str]) -> String {
     String::from_utf8(o.stderr).unwrap()
 }
 
+/// The drape tester without its top disc (whose shading, drawn over the
+/// fabric's centre in the top view, has pixels of the specimen circle's
+/// grey); the measurement is the same with it (tests/measure.rs).
+fn without_top_disc(text: &str) -> String {
+    let start = text.find("[[obstacle]]                 # the top disc").expect("a top disc");
+    let end = start + text[start..].find("\n\n").expect("a blank line after it") + 2;
+    format!("{}{}", &text[..start], &text[end..])
+}
+
 #[test]
 fn drape_tester_frames_are_measured() {
     let dir = scratch("tester");
-    let out = run(&dir, &three_steps(&example("drape-tester")));
+    let out = run(&dir, &three_steps(&without_top_disc(&example("drape-tester"))));
     let out_s = out.to_str().unwrap();
     // Step 0: the flat disc, DC = 1 within 0.5 % (the 90-gon inscribed in
     // the circle: 1 − 0.13 %).
@@ -144,7 +153,7 @@ fn drape_tester_frames_are_measured() {
     assert!(v["frame"].as_str().unwrap().ends_with("step_000000.vtu"));
     // The last frame by default; the nearest by time.
     assert_eq!(measured(&[out_s])["step"], 3);
-    assert_eq!(measured(&[out_s, "--time", "0.011"])["step"], 1);
+    assert_eq!(measured(&[out_s, "--time", "0.0011"])["step"], 1);
     // A radius given takes the place of the one found.
     let v = measured(&[out_s, "--step", "0", "--pedestal-radius", "0.05"]);
     assert_eq!(v["pedestal_radius"], 0.05);
