@@ -1340,6 +1340,11 @@ const BAD_INPUTS: &[BadInput] = &[
         line: Some(26),
     },
     BadInput {
+        file: "clamp_without_all_components.toml",
+        fragments: &["`fix[0].clamp`", "all three components", "[\"z\"]"],
+        line: Some(22),
+    },
+    BadInput {
         file: "friction_in_material.toml",
         fragments: &["`material`", "unknown field `friction`"],
         line: Some(14),

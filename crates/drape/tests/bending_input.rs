@@ -272,7 +272,7 @@ fn bending_on_a_non_manifold_mesh_names_the_edge_and_its_elements() {
         // triangle is alone; elements 0, 1 and 2 share the edge 0-1.
         connectivity: vec![0, 1, 2, 1, 0, 3, 4, 1, 0, 2, 1, 5],
     };
-    let err = Bending::new(&mesh, BendingRigidity::Isotropic(1e-5)).unwrap_err();
+    let err = Bending::new(&mesh, BendingRigidity::Isotropic(1e-5), &[]).unwrap_err();
     let message = err.to_string();
     assert!(
         message.contains("the edge between nodes 0 and 1 is shared by elements 0, 1, 2"),
@@ -362,4 +362,28 @@ fn good_rigidities_build_their_bending() {
             direction: [1.0, 1.0, 0.0],
         }
     );
+}
+
+/// `[[fix]] clamp = true` (issue 31) reaches the bending patches: the
+/// triangles along the clamped column take a ghost for the missing
+/// neighbour and those the clamp holds entirely carry no patch; without
+/// `clamp` the same fix leaves every patch as it was.
+#[test]
+fn a_clamp_gives_the_patches_along_it_a_ghost() {
+    let fix = "[[fix]]\nwithin = { min = [-0.021, -1.0, -1.0], max = [-0.0099, 1.0, 1.0] }\n";
+    let patches = |clamp: &str| {
+        let text = format!("{}\n{fix}{clamp}", scenario("bending_rigidity = 2.0e-5", ""));
+        let setup = build(&text, Path::new("test.toml")).expect("a valid scenario");
+        let bending = setup.model.bending().expect("bending");
+        let ghosts = bending.patches().iter().filter(|p| p.ghost.is_some()).count();
+        (bending.patches().len(), ghosts)
+    };
+    let (plain, none) = patches("");
+    let (clamped, ghosts) = patches("clamp = true\n");
+    assert_eq!(none, 0);
+    // 4 x 3 squares: the column of 3 squares (6 triangles) between the
+    // two held columns has no patch, and the 3 triangles beyond it with
+    // an edge on the clamp line have a ghost.
+    assert_eq!(plain - clamped, 6, "{plain} patches, {clamped} clamped");
+    assert_eq!(ghosts, 3);
 }

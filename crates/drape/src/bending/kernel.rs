@@ -453,7 +453,7 @@ mod tests {
 
     /// The patch of nodes 0–5 of `x` (opposite nodes `opposite`).
     fn fit(x: &[[f64; 3]], opposite: [Option<usize>; 3], rigidity: &Rigidity) -> Patch {
-        Patch::fit([0, 1, 2], opposite, x, &rigidity.0, rigidity.1).expect("a valid patch")
+        Patch::fit([0, 1, 2], opposite, x, &rigidity.0, rigidity.1, None).expect("a valid patch")
     }
 
     const ALL: [Option<usize>; 3] = [Some(3), Some(4), Some(5)];
@@ -741,7 +741,7 @@ mod tests {
     fn curvature_is_exact_for_quadratic_surfaces() {
         let d = BendingRigidity::Isotropic(1e-5).matrix();
         let flat = on_surface(|_| 0.0);
-        let patch = Patch::fit([0, 1, 2], ALL, &flat, &d, None).unwrap();
+        let patch = Patch::fit([0, 1, 2], ALL, &flat, &d, None, None).unwrap();
         assert_eq!(patch.rest, [0.0; 3]);
         for (a, b, c) in [(3.0, -1.7, 5.2), (80.0, -40.0, 120.0), (-25.0, 60.0, 10.0)] {
             let f = vanishing(a, b, c);
@@ -753,7 +753,7 @@ mod tests {
             let what = format!("z = {a} x^2 + {b} xy + {c} y^2 + ...");
             assert_close(curvature(&patch, &x), want, 1e-9, &what);
             // As a reference: its rest curvature.
-            let curved = Patch::fit([0, 1, 2], ALL, &x, &d, None).unwrap();
+            let curved = Patch::fit([0, 1, 2], ALL, &x, &d, None, None).unwrap();
             assert_close(curved.rest, want, 1e-9, &format!("reference {what}"));
             // The energy is 1/2 e . (A D') e, e = kappa - kappa_0.
             let mut out = Local::new();
@@ -772,7 +772,7 @@ mod tests {
             // out of the plane, which is projected away).
             let theta: f64 = 0.6;
             let (sn, cs) = theta.sin_cos();
-            let turned = Patch::fit([0, 1, 2], ALL, &flat, &d, Some([cs, sn, 0.3])).unwrap();
+            let turned = Patch::fit([0, 1, 2], ALL, &flat, &d, Some([cs, sn, 0.3]), None).unwrap();
             let rotated = voigt_along([[2.0 * a, b], [b, 2.0 * c]], [cs, sn]);
             assert_close(
                 curvature(&turned, &x),

@@ -28,8 +28,12 @@
 //! woven fabric is Huber's geometric mean (Huber 1923: `D_12 + 2 D_66 =
 //! sqrt(D_11 D_22)` with `D_12 = 0`). Edges without a neighbour rotate
 //! freely (the moment normal to them vanishes): a free edge, or a simply
-//! supported one where its nodes are held; an edge is clamped by holding
-//! two rows of nodes.
+//! supported one where its nodes are held. An edge whose nodes a `[[fix]]
+//! clamp = true` holds is clamped: the patch across it takes the mirror
+//! image of the triangle's free vertex for the missing neighbour, which
+//! holds the slope there ([`patch`]; the triangles it holds entirely carry
+//! no patch). Without it, an edge is clamped by holding two rows of
+//! nodes, and bends as if clamped midway between them.
 //!
 //! The energy, gradient and Hessian of a patch are in [`kernel`], each
 //! checked against finite differences in its tests.
@@ -301,8 +305,14 @@ fn conic_reason(opposite: [Option<usize>; 3]) -> String {
 
 impl Bending {
     /// The patches of `mesh` for `rigidity`, fitted on the mesh's
-    /// (reference) positions.
-    pub fn new(mesh: &Mesh, rigidity: BendingRigidity) -> Result<Self, BendingError> {
+    /// (reference) positions; `clamped[a]` (empty: none) marks the nodes
+    /// a `[[fix]] clamp = true` holds, whose edges are clamped (the module
+    /// docs).
+    pub fn new(
+        mesh: &Mesh,
+        rigidity: BendingRigidity,
+        clamped: &[bool],
+    ) -> Result<Self, BendingError> {
         let Neighbours {
             triangles,
             owner,
@@ -310,28 +320,36 @@ impl Bending {
         } = Neighbours::of(mesh)?;
         let d = rigidity.matrix();
         let axis = rigidity.axis();
+        let is_clamped = |a: usize| clamped.get(a).copied().unwrap_or(false);
         let mut patches = Vec::with_capacity(triangles.len());
         for (t, tri) in triangles.iter().enumerate() {
-            if opposite[t].iter().all(Option::is_none) {
+            if tri.iter().all(|&a| is_clamped(a)) {
+                continue; // held, with its slope: it cannot bend
+            }
+            // The edge (opposite vertex m) whose two nodes are clamped.
+            let edge =
+                (0..3).find(|&m| is_clamped(tri[(m + 1) % 3]) && is_clamped(tri[(m + 2) % 3]));
+            if edge.is_none() && opposite[t].iter().all(Option::is_none) {
                 continue; // a lone triangle cannot bend
             }
-            let patch = Patch::fit(*tri, opposite[t], &mesh.nodes, &d, axis).map_err(|e| {
-                let element = owner[t];
-                match e {
-                    PatchError::Frame => BendingError::Axis(AxisError {
-                        element,
-                        axis: axis.unwrap_or_default(),
-                    }),
-                    PatchError::Degenerate => BendingError::Patch {
-                        element,
-                        reason: "the triangle has no area".into(),
-                    },
-                    PatchError::Conic => BendingError::Patch {
-                        element,
-                        reason: conic_reason(opposite[t]),
-                    },
-                }
-            })?;
+            let patch =
+                Patch::fit(*tri, opposite[t], &mesh.nodes, &d, axis, edge).map_err(|e| {
+                    let element = owner[t];
+                    match e {
+                        PatchError::Frame => BendingError::Axis(AxisError {
+                            element,
+                            axis: axis.unwrap_or_default(),
+                        }),
+                        PatchError::Degenerate => BendingError::Patch {
+                            element,
+                            reason: "the triangle has no area".into(),
+                        },
+                        PatchError::Conic => BendingError::Patch {
+                            element,
+                            reason: conic_reason(opposite[t]),
+                        },
+                    }
+                })?;
             patches.push(patch);
         }
         let mut ptr = Vec::with_capacity(patches.len() + 1);
@@ -422,10 +440,9 @@ impl Bending {
                 let p = &self.patches[k];
                 let nodes = p.nodes();
                 let len = nodes.len();
-                for (k, &a) in nodes.iter().enumerate() {
-                    x[k] = [y[3 * a], y[3 * a + 1], y[3 * a + 2]];
-                }
+                p.positions(|a| [y[3 * a], y[3 * a + 1], y[3 * a + 2]], &mut x);
                 energy += kernel::evaluate(p, &x[..len], want_h, local);
+                p.fold(local, want_h);
                 if want_h && project.is_some_and(|flags| nodes.iter().any(|&a| flags[a])) {
                     crate::psd::project(
                         local.hessian.as_flattened_mut(),
@@ -487,11 +504,8 @@ impl Bending {
         self.patches
             .iter()
             .map(|p| {
-                let nodes = p.nodes();
-                for (k, &a) in nodes.iter().enumerate() {
-                    x[k] = [y[3 * a], y[3 * a + 1], y[3 * a + 2]];
-                }
-                kernel::energy(p, &x[..nodes.len()])
+                p.positions(|a| [y[3 * a], y[3 * a + 1], y[3 * a + 2]], &mut x);
+                kernel::energy(p, &x[..p.len()])
             })
             .sum()
     }
@@ -525,7 +539,7 @@ mod tests {
         mesh.nodes.push(centroid);
         mesh.connectivity[3 * e..3 * e + 3].copy_from_slice(&[a, b, g]);
         mesh.connectivity.extend_from_slice(&[b, c, g, c, a, g]);
-        let e = Bending::new(&mesh, BendingRigidity::Isotropic(2e-5)).unwrap_err();
+        let e = Bending::new(&mesh, BendingRigidity::Isotropic(2e-5), &[]).unwrap_err();
         let text = e.to_string();
         assert!(
             text.contains("an interior node with only three neighbours")
@@ -545,7 +559,7 @@ mod tests {
             ElementOrder::Cubic,
         ] {
             let mesh = rectangle([0.2, 0.1], [6, 3], Pattern::Alternate, [0.0; 3], order);
-            let bending = Bending::new(&mesh, BendingRigidity::Isotropic(2e-5)).unwrap();
+            let bending = Bending::new(&mesh, BendingRigidity::Isotropic(2e-5), &[]).unwrap();
             let (ptr, nodes) = stencils_of(&mesh).unwrap();
             let sorted = |s: &[usize]| {
                 let mut v = s.to_vec();
@@ -571,7 +585,7 @@ mod tests {
             [0.0; 3],
             ElementOrder::Linear,
         );
-        let mut serial = Bending::new(&mesh, BendingRigidity::Isotropic(2e-5)).unwrap();
+        let mut serial = Bending::new(&mesh, BendingRigidity::Isotropic(2e-5), &[]).unwrap();
         let pattern =
             SparsePattern::new(mesh.node_count(), mesh.elements().chain(serial.stencils()));
         let mut parallel = serial.clone();

@@ -35,6 +35,25 @@
 //! D' = D - D F (F^T D F)^-1 F^T D,   F = [hhat(z) for z in null]
 //! ```
 //!
+//! A **clamped edge** (`[[fix]] clamp = true`: both its nodes held, its
+//! triangle's third vertex free) holds the slope across it: the node
+//! opposite it is a ghost, the mirror image of the triangle's own third
+//! vertex `X_m` across the edge, in the reference plane of the triangle,
+//!
+//! ```text
+//! x_g = a + R (x_m - a),   R = I - 2 m m^T
+//! ```
+//!
+//! (`a` a node of the edge, held; `m` the unit vector of the reference
+//! plane normal to the edge): the clamped-edge treatment of the Basic
+//! Shell Triangle (Oñate & Zárate 2000, §4), for which the surface through
+//! the patch has, across the edge, the slope of its reference plane — a
+//! beam clamped at a node and bent to `w` at the next one `h` away gets
+//! the curvature `2 w / h^2` of a clamp at that node, where the held
+//! triangle beyond gave `w / h^2`, a clamp half an element further. The
+//! ghost moves with `x_m`, so its derivatives are folded onto `x_m` by
+//! `R` ([`Patch::fold`]).
+//!
 //! The patch is the rotation-free triangle of Oñate & Zárate (2000,
 //! "Rotation-free triangular plate and shell elements", Int. J. Numer.
 //! Meth. Engng 47) with the quadratic interpolation over the patch of
@@ -62,6 +81,31 @@ pub struct Patch {
     pub stiffness: [[f64; 3]; 3],
     /// Curvature of the reference configuration, `kappa_0` (1/m).
     pub rest: [f64; 3],
+    /// The ghost across a clamped edge, if any (its slot in `nodes` holds
+    /// the global node it mirrors).
+    pub ghost: Option<Ghost>,
+}
+
+/// The mirror image of a triangle's vertex across its clamped edge (the
+/// module docs): a patch node whose position follows the vertex's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ghost {
+    /// Its local index among the patch's nodes (3 to 5).
+    pub slot: usize,
+    /// The local index of the vertex it mirrors (0 to 2).
+    pub vertex: usize,
+    /// A node of the clamped edge, at its (held) reference position (m).
+    pub anchor: [f64; 3],
+    /// The reflection `R = I - 2 m m^T` (symmetric).
+    pub reflect: [[f64; 3]; 3],
+}
+
+impl Ghost {
+    /// The ghost's position when the vertex it mirrors is at `x`.
+    pub fn position(&self, x: [f64; 3]) -> [f64; 3] {
+        let d = sub(x, self.anchor);
+        std::array::from_fn(|i| self.anchor[i] + dot(self.reflect[i], d))
+    }
 }
 
 /// Why a patch cannot be fitted.
@@ -88,9 +132,59 @@ impl Patch {
         self.len == 0
     }
 
-    /// The patch's global nodes.
+    /// The patch's global nodes (a ghost's slot holds the node it
+    /// mirrors).
     pub fn nodes(&self) -> &[usize] {
         &self.nodes[..self.len()]
+    }
+
+    /// The positions of the patch's nodes into `out` (its first
+    /// [`Self::len`] entries), node `a` at `at(a)`, the ghost's mirrored.
+    pub fn positions(&self, at: impl Fn(usize) -> [f64; 3], out: &mut [[f64; 3]]) {
+        for (k, &a) in self.nodes().iter().enumerate() {
+            out[k] = at(a);
+        }
+        if let Some(g) = &self.ghost {
+            out[g.slot] = g.position(out[g.vertex]);
+        }
+    }
+
+    /// Folds the ghost's gradient and Hessian rows and columns in `local`
+    /// (as the kernel wrote them, the ghost a node of its own) onto the
+    /// vertex it mirrors — `g_v += R g_g`, `H <- J^T H J` with `dx_g / dx_v
+    /// = R` — and zeroes them: the derivatives with respect to the patch's
+    /// real nodes. Nothing without a ghost.
+    pub fn fold(&self, local: &mut super::kernel::Local, hessian: bool) {
+        let Some(g) = &self.ghost else {
+            return;
+        };
+        let (s, v, r) = (3 * g.slot, 3 * g.vertex, &g.reflect);
+        let gs: [f64; 3] = std::array::from_fn(|i| local.gradient[s + i]);
+        for i in 0..3 {
+            local.gradient[v + i] += dot(r[i], gs);
+            local.gradient[s + i] = 0.0;
+        }
+        if !hessian {
+            return;
+        }
+        let n = 3 * self.len();
+        let h = &mut local.hessian;
+        // Rows: H[v, :] += R H[s, :] (R symmetric), then zero row s.
+        for c in 0..n {
+            let hs: [f64; 3] = std::array::from_fn(|i| h[s + i][c]);
+            for i in 0..3 {
+                h[v + i][c] += dot(r[i], hs);
+                h[s + i][c] = 0.0;
+            }
+        }
+        // Columns: H[:, v] += H[:, s] R, then zero column s.
+        for row in h.iter_mut().take(n) {
+            let hs: [f64; 3] = std::array::from_fn(|j| row[s + j]);
+            for j in 0..3 {
+                row[v + j] += dot(r[j], hs);
+                row[s + j] = 0.0;
+            }
+        }
     }
 
     /// Fits the patch of triangle `vertices` with opposite vertices
@@ -98,13 +192,16 @@ impl Patch {
     /// boundary), at reference positions `x`, with constitutive matrix
     /// `d` (Voigt, N m) given in the frame whose first axis is `axis`
     /// projected on the triangle's plane (`None`: along the first edge,
-    /// for an isotropic `d`).
+    /// for an isotropic `d`). With `clamped = Some(m)` the edge opposite
+    /// vertex `m` is clamped: its opposite node is the ghost of vertex `m`
+    /// (the module docs), in place of `opposite[m]`.
     pub fn fit(
         vertices: [usize; 3],
         opposite: [Option<usize>; 3],
         x: &[[f64; 3]],
         d: &[[f64; 3]; 3],
         axis: Option<[f64; 3]>,
+        clamped: Option<usize>,
     ) -> Result<Self, PatchError> {
         let [x0, x1, x2] = vertices.map(|v| x[v]);
         let m = cross(sub(x1, x0), sub(x2, x0));
@@ -160,17 +257,28 @@ impl Patch {
             std::array::from_fn(|m| 4.0 * l[(m + 1) % 3] * l[(m + 2) % 3])
         };
 
-        // The equations of the opposite vertices that exist.
+        // The equations of the opposite vertices that exist (and the
+        // ghost's, across a clamped edge).
         let mut nodes = [usize::MAX; 6];
         nodes[..3].copy_from_slice(&vertices);
         let mut len = 3;
         let mut rows: Vec<[f64; 3]> = Vec::new();
         let mut lambdas: Vec<[f64; 3]> = Vec::new();
-        for p in opposite.iter().flatten() {
-            let l = lambda(local(x[*p]));
+        let mut ghost = None;
+        for (m, p) in opposite.iter().enumerate() {
+            let (position, node) = if clamped == Some(m) {
+                let g = Ghost::across([x0, x1, x2], m, normal, len);
+                ghost = Some(g);
+                (g.position([x0, x1, x2][m]), vertices[m])
+            } else if let Some(p) = *p {
+                (x[p], p)
+            } else {
+                continue;
+            };
+            let l = lambda(local(position));
             rows.push(bubble(l));
             lambdas.push(l);
-            nodes[len] = *p;
+            nodes[len] = node;
             len += 1;
         }
         let (g, null) = solve_rows(&rows)?;
@@ -199,10 +307,33 @@ impl Patch {
             coefficients,
             stiffness,
             rest: [0.0; 3],
+            ghost,
         };
-        let xs: Vec<[f64; 3]> = patch.nodes().iter().map(|&a| x[a]).collect();
-        patch.rest = super::kernel::curvature(&patch, &xs);
+        let mut xs = [[0.0; 3]; 6];
+        patch.positions(|a| x[a], &mut xs);
+        patch.rest = super::kernel::curvature(&patch, &xs[..len]);
         Ok(patch)
+    }
+}
+
+impl Ghost {
+    /// The ghost of vertex `m` of the triangle with reference vertices `x`
+    /// and unit normal `normal`, across the edge opposite it, in patch
+    /// slot `slot`.
+    fn across(x: [[f64; 3]; 3], m: usize, normal: [f64; 3], slot: usize) -> Self {
+        let (a, b) = (x[(m + 1) % 3], x[(m + 2) % 3]);
+        // The in-plane unit vector normal to the edge.
+        let e = sub(b, a);
+        let u = cross(normal, e);
+        let u = scale(u, 1.0 / norm(u));
+        Self {
+            slot,
+            vertex: m,
+            anchor: a,
+            reflect: std::array::from_fn(|i| {
+                std::array::from_fn(|j| f64::from(u8::from(i == j)) - 2.0 * u[i] * u[j])
+            }),
+        }
     }
 }
 

@@ -101,6 +101,7 @@ pub struct ModelBuilder {
     mass_kind: MassKind,
     contact: Option<ContactModel>,
     bending: Option<BendingRigidity>,
+    clamped: Vec<bool>,
 }
 
 impl ModelBuilder {
@@ -138,6 +139,15 @@ impl ModelBuilder {
         self
     }
 
+    /// Clamps (`[[fix]] clamp = true`): `clamped[a]` marks node `a`, held
+    /// in all three components, whose slope the bending patches hold too
+    /// ([`crate::bending`]; missing entries are not clamped). Nothing
+    /// without bending.
+    pub fn clamped(mut self, clamped: Vec<bool>) -> Self {
+        self.clamped = clamped;
+        self
+    }
+
     /// Builds the model. The mesh is validated first, then the element
     /// geometry (in the material's axes), the bending patches, the sparse
     /// pattern of the elements and patches with the assembly's layout on
@@ -153,6 +163,7 @@ impl ModelBuilder {
             mass_kind,
             contact,
             bending,
+            clamped,
         } = self;
         mesh.validate()?;
         let p = mesh.order.degree();
@@ -165,7 +176,7 @@ impl ModelBuilder {
         let parallel = parallel_for(&mesh);
         let halves = (!parallel).then(|| Halves::new(&mesh, &colours));
         let mut bending = match bending {
-            Some(rigidity) => Some(Bending::new(&mesh, rigidity)?),
+            Some(rigidity) => Some(Bending::new(&mesh, rigidity, &clamped)?),
             None => None,
         };
         let layout = Layout::new(&mesh, &colours, halves.as_ref(), bending.as_ref());
@@ -411,6 +422,7 @@ impl Model {
             mass_kind: MassKind::Consistent,
             contact: None,
             bending: None,
+            clamped: Vec::new(),
         }
     }
 

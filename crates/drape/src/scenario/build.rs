@@ -167,8 +167,9 @@ impl Scenario {
             .map(|(i, l)| build_load(&c, &mesh, i, l))
             .collect::<Result<Vec<_>, _>>()?;
         let mut fixed = vec![false; 3 * mesh.node_count()];
+        let mut clamped = vec![false; mesh.node_count()];
         for (i, f) in self.fixes.iter().enumerate() {
-            build_fix(&c, &mesh, i, f, &mut fixed)?;
+            build_fix(&c, &mesh, i, f, (&mut fixed, &mut clamped))?;
         }
         let contact = build_contact(&c, self, &base, &mut inputs)?;
         let (analysis, adaptive, rest) = build_analysis(&c, self)?;
@@ -184,6 +185,7 @@ impl Scenario {
         let model = Model::builder(mesh, material, section, density)
             .loads(loads)
             .fixed(fixed)
+            .clamped(clamped)
             .mass(self.analysis.mass)
             .contact(contact)
             .bending(bending)
@@ -813,12 +815,14 @@ fn select(
     Ok(nodes)
 }
 
+/// `[[fix]]` number `i` into `fixed` (per component) and, with `clamp =
+/// true`, `clamped` (per node).
 fn build_fix(
     c: &Checker,
     mesh: &Mesh,
     i: usize,
     f: &FixSpec,
-    fixed: &mut [bool],
+    (fixed, clamped): (&mut [bool], &mut [bool]),
 ) -> Result<(), ScenarioError> {
     let nodes = select(c, mesh, "fix", i, f.at, &f.within, f.boundary)?;
     let components = match &f.components {
@@ -846,10 +850,23 @@ fn build_fix(
             })
             .collect::<Result<_, _>>()?,
     };
+    let clamp = f.clamp.unwrap_or(false);
+    if clamp && components.len() < 3 {
+        return Err(c.invalid(
+            "fix",
+            Some(i),
+            "clamp",
+            format!(
+                "= true needs the nodes held in all three components (a clamp holds the fabric's position and its slope), but components = {:?}; drop `components` or `clamp`",
+                f.components.as_deref().unwrap_or_default()
+            ),
+        ));
+    }
     for n in nodes {
         for &k in &components {
             fixed[3 * n + k] = true;
         }
+        clamped[n] |= clamp;
     }
     Ok(())
 }

@@ -310,6 +310,11 @@ pub struct FixSpec {
     pub boundary: Option<bool>,
     /// Which components are fixed: any of `"x"`, `"y"`, `"z"`. Default: all three.
     pub components: Option<Vec<String>>,
+    /// A clamp (SPEC §6.6): the held nodes also hold the fabric's slope
+    /// across the boundary between them and the free nodes, so that a
+    /// cantilever's free length starts at the last held node. Needs all
+    /// three components. Default false.
+    pub clamp: Option<bool>,
 }
 
 /// `[analysis]`.
