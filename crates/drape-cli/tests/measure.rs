@@ -124,7 +124,9 @@ fn refused(args: &[&str]) -> String {
 /// fabric's centre in the top view, has pixels of the specimen circle's
 /// grey); the measurement is the same with it (tests/measure.rs).
 fn without_top_disc(text: &str) -> String {
-    let start = text.find("[[obstacle]]                 # the top disc").expect("a top disc");
+    let start = text
+        .find("[[obstacle]]                 # the top disc")
+        .expect("a top disc");
     let end = start + text[start..].find("\n\n").expect("a blank line after it") + 2;
     format!("{}{}", &text[..start], &text[end..])
 }
@@ -132,7 +134,10 @@ fn without_top_disc(text: &str) -> String {
 #[test]
 fn drape_tester_frames_are_measured() {
     let dir = scratch("tester");
-    let out = run(&dir, &three_steps(&without_top_disc(&example("drape-tester"))));
+    let out = run(
+        &dir,
+        &three_steps(&without_top_disc(&example("drape-tester"))),
+    );
     let out_s = out.to_str().unwrap();
     // Step 0: the flat disc, DC = 1 within 0.5 % (the 90-gon inscribed in
     // the circle: 1 − 0.13 %).

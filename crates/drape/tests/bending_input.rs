@@ -372,10 +372,17 @@ fn good_rigidities_build_their_bending() {
 fn a_clamp_gives_the_patches_along_it_a_ghost() {
     let fix = "[[fix]]\nwithin = { min = [-0.021, -1.0, -1.0], max = [-0.0099, 1.0, 1.0] }\n";
     let patches = |clamp: &str| {
-        let text = format!("{}\n{fix}{clamp}", scenario("bending_rigidity = 2.0e-5", ""));
+        let text = format!(
+            "{}\n{fix}{clamp}",
+            scenario("bending_rigidity = 2.0e-5", "")
+        );
         let setup = build(&text, Path::new("test.toml")).expect("a valid scenario");
         let bending = setup.model.bending().expect("bending");
-        let ghosts = bending.patches().iter().filter(|p| p.ghost.is_some()).count();
+        let ghosts = bending
+            .patches()
+            .iter()
+            .filter(|p| p.ghost.is_some())
+            .count();
         (bending.patches().len(), ghosts)
     };
     let (plain, none) = patches("");
