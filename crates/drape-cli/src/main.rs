@@ -6,7 +6,8 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use drape::output::directory;
-use drape::scenario::{Scenario, ScenarioError, Setup};
+use drape::scenario::{Scenario, ScenarioError};
+use drape::setup::Setup;
 use drape::simulation::{self, RunControl, RunError, StepInfo};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -250,7 +251,7 @@ fn check(path: &Path) -> Result<(), Failure> {
     println!("  mass      {:.6e} kg ({mass_kind})", m.total_mass());
     println!("  loads     {}", m.loads().len());
     match &setup.analysis {
-        drape::scenario::Analysis::Dynamic { newmark, segments } => {
+        drape::setup::Analysis::Dynamic { newmark, segments } => {
             let steps: usize = segments.iter().map(|s| s.0).sum();
             let end: f64 = segments.iter().map(|(n, dt)| *n as f64 * dt).sum();
             println!(
@@ -276,7 +277,7 @@ fn check(path: &Path) -> Result<(), Failure> {
                 );
             }
         }
-        drape::scenario::Analysis::Static { steps } => {
+        drape::setup::Analysis::Static { steps } => {
             println!(
                 "  static    {steps} load {}",
                 if *steps == 1 {

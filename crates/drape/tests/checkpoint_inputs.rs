@@ -9,8 +9,10 @@
 mod common;
 
 use common::temp_dir;
+use drape::input::fnv1a;
 use drape::output::pvd::frame_relative_path;
-use drape::scenario::{Scenario, Setup, fnv1a};
+use drape::scenario::Scenario;
+use drape::setup::Setup;
 use drape::simulation::{
     self, Checkpoint, RunControl, RunError, check_resume_inputs, checkpoint_path,
 };

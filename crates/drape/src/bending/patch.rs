@@ -201,9 +201,44 @@ impl Patch {
             rest: [0.0; 3],
         };
         let xs: Vec<[f64; 3]> = patch.nodes().iter().map(|&a| x[a]).collect();
-        patch.rest = super::kernel::curvature(&patch, &xs);
+        patch.rest = patch.curvature(&xs);
         Ok(patch)
     }
+
+    /// The curvatures `kappa` (Voigt: `kappa_11, kappa_22, 2 kappa_12`) of the
+    /// patch at positions `x` (its nodes' positions, in the patch's order):
+    /// `kappa_j = n . v_j` ([`super::kernel`] has the symbols).
+    pub fn curvature(&self, x: &[[f64; 3]]) -> [f64; 3] {
+        let n = normal(x).0;
+        let mut kappa = [0.0; 3];
+        for (j, kj) in kappa.iter_mut().enumerate() {
+            let v = self.second_derivative(x, j);
+            *kj = dot(n, v);
+        }
+        kappa
+    }
+
+    /// `v_j = sum_k C_jk x_k`.
+    #[inline]
+    pub(super) fn second_derivative(&self, x: &[[f64; 3]], j: usize) -> [f64; 3] {
+        let mut v = [0.0; 3];
+        for (k, xk) in x.iter().enumerate() {
+            let c = self.coefficients[j][k];
+            for i in 0..3 {
+                v[i] += c * xk[i];
+            }
+        }
+        v
+    }
+}
+
+/// The unit normal of the patch's triangle (its first three positions in
+/// `x`) and `|m|`, twice its area.
+#[inline]
+pub(super) fn normal(x: &[[f64; 3]]) -> ([f64; 3], f64) {
+    let m = cross(sub(x[1], x[0]), sub(x[2], x[0]));
+    let r = norm(m);
+    (scale(m, 1.0 / r), r)
 }
 
 /// For the equations `rows . c = r` (1 to 3 rows of 3), the minimum-norm

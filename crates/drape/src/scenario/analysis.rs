@@ -2,11 +2,10 @@
 //! parameters and the schedule's segments of a dynamic analysis, with its
 //! adaptive steps and rest criterion, or the increments of a static one.
 
-use super::build::Analysis;
 use super::check::Checker;
 use super::{AnalysisKind, Scenario, ScenarioError, SegmentSpec, TimeSpec};
 use crate::integrator::Newmark;
-use crate::simulation::schedule::{AdaptiveSteps, RestCriterion};
+use crate::setup::{AdaptiveSteps, Analysis, RestCriterion};
 
 /// `[analysis]` and `[time]`: how time (or load) advances, with the
 /// adaptive steps and the rest criterion of a dynamic analysis.

@@ -1,5 +1,5 @@
 //! The scenario file (TOML): its keys, their defaults and ranges, and the
-//! construction of a [`Setup`] (model, schedule, monitors) from it.
+//! construction of a [`Setup`](crate::setup::Setup) (model, schedule, monitors) from it.
 //!
 //! Every key is documented on its field (here, in `obstacle` for the
 //! `[[obstacle]]` shapes and in `contact` for the `[contact]` methods); the
@@ -27,7 +27,7 @@ mod material;
 mod obstacle;
 mod tagged;
 
-pub use build::{Analysis, InputFile, Monitor, Setup, fnv1a, read_mesh_file};
+pub use build::read_mesh_file;
 pub use contact::{ContactMethodName, ContactSpec, LagrangeSpec, PenaltySpec};
 pub use obstacle::{
     BoxObstacleSpec, CylinderObstacleSpec, MeshObstacleSpec, ObstacleShape, ObstacleSpec,

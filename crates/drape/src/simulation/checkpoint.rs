@@ -48,8 +48,9 @@
 
 use crate::contact::ContactState;
 use crate::contact::lagrange::MAX_ACTIVE_SET_ROUNDS;
+use crate::input::{InputFile, fnv1a};
 use crate::integrator::State;
-use crate::scenario::{Analysis, InputFile, Setup, fnv1a};
+use crate::setup::{Analysis, Setup};
 use crate::simulation::schedule::REST_STEPS;
 use crate::solver::LinearStats;
 use std::path::{Path, PathBuf};

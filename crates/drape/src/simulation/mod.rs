@@ -37,7 +37,7 @@ use crate::integrator::{State, StaticStepper, StepEnergies};
 use crate::model::Model;
 use crate::output::atomic::write_atomic;
 use crate::output::history::HistoryWriter;
-use crate::scenario::{Analysis, Setup};
+use crate::setup::{Analysis, Setup};
 use crate::solver::NewtonError;
 pub use checkpoint::{Checkpoint, CheckpointError, Counters};
 use frames::Snapshot;

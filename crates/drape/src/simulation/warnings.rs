@@ -19,7 +19,7 @@
 //!   the compression.
 
 use super::schedule::{DEFAULT_DT_MAX_FACTOR, END_TOLERANCE, REST_STEPS};
-use crate::scenario::{Analysis, Setup};
+use crate::setup::{Analysis, Setup};
 use crate::vec3::{norm, sub};
 
 /// The largest motion of an obstacle in one step, as a fraction of the
