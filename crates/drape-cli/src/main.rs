@@ -253,7 +253,7 @@ fn check(path: &Path) -> Result<(), Failure> {
     match &setup.analysis {
         drape::setup::Analysis::Dynamic { newmark, segments } => {
             let steps: usize = segments.iter().map(|s| s.0).sum();
-            let end: f64 = segments.iter().map(|(n, dt)| *n as f64 * dt).sum();
+            let end = setup.analysis.end_time();
             println!(
                 "  dynamic   beta = {}, gamma = {}, {steps} {} to t = {} s",
                 human(newmark.beta),

@@ -38,6 +38,29 @@ pub enum Analysis {
     },
 }
 
+impl Analysis {
+    /// The schedule as `(steps, dt)` segments: a dynamic analysis' own; a
+    /// static one's `steps` increments of `1 / steps`, its "time" being
+    /// the load factor from 0 to 1.
+    pub fn schedule(&self) -> Vec<(usize, f64)> {
+        match self {
+            Analysis::Dynamic { segments, .. } => segments.clone(),
+            Analysis::Static { steps } => vec![(*steps, 1.0 / *steps as f64)],
+        }
+    }
+
+    /// The schedule's end time (s): the sum over the segments of `steps
+    /// dt`; 1 in statics (the full load).
+    pub fn end_time(&self) -> f64 {
+        match self {
+            Analysis::Dynamic { segments, .. } => {
+                segments.iter().map(|(n, dt)| *n as f64 * dt).sum()
+            }
+            Analysis::Static { .. } => 1.0,
+        }
+    }
+}
+
 /// Everything needed to run a scenario.
 #[derive(Debug)]
 pub struct Setup {
@@ -92,4 +115,28 @@ pub struct RestCriterion {
     pub speed: f64,
     /// Steps ending before this time (s) do not count, >= 0.
     pub after: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The end time is the segments' steps times their dt, summed (in
+    /// binary fractions, so exactly); statics end at the full load, in
+    /// `steps` increments.
+    #[test]
+    fn end_time_and_schedule() {
+        let dynamic = Analysis::Dynamic {
+            newmark: Newmark {
+                beta: 0.25,
+                gamma: 0.5,
+            },
+            segments: vec![(3, 0.5), (2, 0.25), (4, 0.125)],
+        };
+        assert_eq!(dynamic.end_time(), 2.5);
+        assert_eq!(dynamic.schedule(), vec![(3, 0.5), (2, 0.25), (4, 0.125)]);
+        let statics = Analysis::Static { steps: 4 };
+        assert_eq!(statics.end_time(), 1.0);
+        assert_eq!(statics.schedule(), vec![(4, 0.25)]);
+    }
 }
