@@ -5,8 +5,8 @@ use super::check::Checker;
 use super::contact::{build_contact, check_initial_penetration};
 use super::material::{build_bending, build_material};
 use super::{
-    AnalysisKind, BoxSpec, FixSpec, LoadKindSpec, LoadSpec, MeshShape, MeshSpec, MonitorSpec,
-    Scenario, ScenarioError, SolverSpec,
+    AnalysisKind, BoxSpec, Component, FixSpec, LoadKindSpec, LoadSpec, MeshShape, MeshSpec,
+    MonitorSpec, Scenario, ScenarioError, SolverSpec,
 };
 use crate::bending::BendingError;
 use crate::input::{InputFile, fnv1a};
@@ -693,7 +693,7 @@ fn build_fix(
 ) -> Result<(), ScenarioError> {
     let nodes = select(c, mesh, "fix", i, f.at, &f.within, f.boundary)?;
     let components = match &f.components {
-        None => vec![0, 1, 2],
+        None => &[Component::X, Component::Y, Component::Z][..],
         Some(list) if list.is_empty() => {
             return Err(c.invalid(
                 "fix",
@@ -702,24 +702,11 @@ fn build_fix(
                 "must list at least one of \"x\", \"y\", \"z\"".into(),
             ));
         }
-        Some(list) => list
-            .iter()
-            .map(|s| match s.as_str() {
-                "x" => Ok(0),
-                "y" => Ok(1),
-                "z" => Ok(2),
-                other => Err(c.invalid(
-                    "fix",
-                    Some(i),
-                    "components",
-                    format!("must be \"x\", \"y\" or \"z\", not {other:?}"),
-                )),
-            })
-            .collect::<Result<_, _>>()?,
+        Some(list) => list,
     };
     for n in nodes {
-        for &k in &components {
-            fixed[3 * n + k] = true;
+        for k in components {
+            fixed[3 * n + k.index()] = true;
         }
     }
     Ok(())

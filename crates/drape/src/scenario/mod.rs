@@ -309,7 +309,30 @@ pub struct FixSpec {
     /// Every node on the mesh's free edge (combine with `within` to take part of it).
     pub boundary: Option<bool>,
     /// Which components are fixed: any of `"x"`, `"y"`, `"z"`. Default: all three.
-    pub components: Option<Vec<String>>,
+    pub components: Option<Vec<Component>>,
+}
+
+/// A component of a node's position, as `[[fix]] components` names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Component {
+    /// `"x"`.
+    X,
+    /// `"y"`.
+    Y,
+    /// `"z"`.
+    Z,
+}
+
+impl Component {
+    /// Its index in a node's position `[x, y, z]`.
+    pub fn index(self) -> usize {
+        match self {
+            Component::X => 0,
+            Component::Y => 1,
+            Component::Z => 2,
+        }
+    }
 }
 
 /// `[analysis]`.
