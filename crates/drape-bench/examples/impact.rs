@@ -1,7 +1,8 @@
 //! Debug aid: Newton's residuals at the impact step of a scenario.
 //! `cargo run --release -p drape-bench --example impact -- SCENARIO STEPS`
 use drape::integrator::newmark::DynamicWorkspace;
-use drape::scenario::{Analysis, Scenario};
+use drape::scenario::Scenario;
+use drape::setup::Analysis;
 use drape::simulation::reference_length;
 use std::path::Path;
 

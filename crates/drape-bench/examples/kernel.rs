@@ -9,7 +9,8 @@
 
 use drape::integrator::State;
 use drape::model::Model;
-use drape::scenario::{Scenario, Setup};
+use drape::scenario::Scenario;
+use drape::setup::Setup;
 use drape::solver::LinearSolver;
 use drape::solver::block_lu::BlockLu;
 use std::hint::black_box;
@@ -63,7 +64,7 @@ fn main() {
 
 /// The state of the scenario `s` (dynamic) after `steps` steps.
 fn draped(s: &Setup, steps: usize) -> State {
-    let drape::scenario::Analysis::Dynamic { newmark, segments } = &s.analysis else {
+    let drape::setup::Analysis::Dynamic { newmark, segments } = &s.analysis else {
         panic!("dynamic")
     };
     let model = &s.model;

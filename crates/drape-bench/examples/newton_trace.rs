@@ -19,7 +19,7 @@ fn main() {
         .unwrap()
         .build(path, &text)
         .unwrap();
-    let drape::scenario::Analysis::Dynamic { newmark, segments } = &s.analysis else {
+    let drape::setup::Analysis::Dynamic { newmark, segments } = &s.analysis else {
         panic!("dynamic")
     };
     let model = &s.model;

@@ -6,8 +6,10 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use drape::output::directory;
-use drape::scenario::{Scenario, ScenarioError, Setup};
+use drape::scenario::{Scenario, ScenarioError};
+use drape::setup::Setup;
 use drape::simulation::{self, RunControl, RunError, StepInfo};
+use drape_render::{Field, View};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -89,8 +91,8 @@ enum Command {
         #[arg(short = 'o', long)]
         output: Option<PathBuf>,
         /// Image size WxH [default: 1200x900]; 320 to 10000 by 240 to 10000.
-        #[arg(long)]
-        size: Option<String>,
+        #[arg(long, value_name = "WxH", value_parser = parse_size)]
+        size: Option<(u32, u32)>,
     },
     /// Measure a drape as a drape tester does (ISO 9073-9): the shadow's
     /// area, the drape coefficient and the folds of one frame, as one JSON
@@ -172,7 +174,7 @@ fn main() -> ExitCode {
         } => run(scenario, out, resume, quiet, verbose),
         Command::Check { scenario } => check(&scenario),
         Command::Render(args) => render(args),
-        Command::Plot { dir, output, size } => plot(&dir, output, size.as_deref()),
+        Command::Plot { dir, output, size } => plot(&dir, output, size),
         Command::Measure {
             dir,
             step,
@@ -250,9 +252,9 @@ fn check(path: &Path) -> Result<(), Failure> {
     println!("  mass      {:.6e} kg ({mass_kind})", m.total_mass());
     println!("  loads     {}", m.loads().len());
     match &setup.analysis {
-        drape::scenario::Analysis::Dynamic { newmark, segments } => {
+        drape::setup::Analysis::Dynamic { newmark, segments } => {
             let steps: usize = segments.iter().map(|s| s.0).sum();
-            let end: f64 = segments.iter().map(|(n, dt)| *n as f64 * dt).sum();
+            let end = setup.analysis.end_time();
             println!(
                 "  dynamic   beta = {}, gamma = {}, {steps} {} to t = {} s",
                 human(newmark.beta),
@@ -276,7 +278,7 @@ fn check(path: &Path) -> Result<(), Failure> {
                 );
             }
         }
-        drape::scenario::Analysis::Static { steps } => {
+        drape::setup::Analysis::Static { steps } => {
             println!(
                 "  static    {steps} load {}",
                 if *steps == 1 {
@@ -620,13 +622,12 @@ struct RenderArgs {
     /// The frame nearest this time (s).
     #[arg(long, allow_negative_numbers = true)]
     time: Option<f64>,
-    /// Camera: top, side or perspective.
-    #[arg(long, default_value = "perspective", value_parser = ["top", "side", "perspective"])]
-    view: String,
-    /// displacement_z, displacement, velocity, contact_force,
-    /// principal_stress_max, principal_stress_min or wrinkle_state.
-    #[arg(long, default_value = "displacement_z")]
-    field: String,
+    /// Camera.
+    #[arg(long, value_enum, default_value_t = View::Perspective)]
+    view: View,
+    /// The field that colours the fabric.
+    #[arg(long, value_enum, default_value_t = Field::DisplacementZ)]
+    field: Field,
     /// A panel of frames from the first to the last, one colour scale.
     #[arg(long, conflicts_with_all = ["animate", "step", "time"])]
     grid: bool,
@@ -651,33 +652,25 @@ struct RenderArgs {
     /// Image size WxH [default: 1200x900; 800x600 with --animate]; 160 to
     /// 10000 by 120 to 10000, and at most 2 GiB of pixel buffers (3x
     /// supersampled: about 5000x5000).
-    #[arg(long)]
-    size: Option<String>,
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    size: Option<(u32, u32)>,
     /// Colour scale limits instead of the field's range.
     #[arg(long, num_args = 2, value_names = ["MIN", "MAX"], allow_negative_numbers = true)]
     range: Option<Vec<f64>>,
 }
 
-/// `--size WxH`; the renderer checks the range (render and plot have
-/// their own) and the memory it needs.
-fn parse_size(size: Option<&str>, default: (u32, u32)) -> Result<(u32, u32), Failure> {
-    let Some(text) = size else { return Ok(default) };
+/// `--size WxH` in pixels; the renderer checks the range (render and plot
+/// have their own) and the memory it needs.
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
     text.split_once(['x', 'X'])
         .and_then(|(w, h)| Some((w.trim().parse().ok()?, h.trim().parse().ok()?)))
-        .ok_or_else(|| {
-            Failure::Input(anyhow::anyhow!(
-                "--size {text:?}: expected WxH in pixels, e.g. 1200x900"
-            ))
-        })
+        .ok_or_else(|| "expected WxH in pixels, e.g. 1200x900".to_string())
 }
 
 fn render(a: RenderArgs) -> Result<(), Failure> {
     use drape_render::{FrameSelect, Layout, RenderOptions};
     let input = |e: drape_render::RenderError| Failure::Input(anyhow::Error::new(e));
-    let (width, height) = parse_size(
-        a.size.as_deref(),
-        if a.animate { (800, 600) } else { (1200, 900) },
-    )?;
+    let (width, height) = (a.size).unwrap_or(if a.animate { (800, 600) } else { (1200, 900) });
     let mut opts = RenderOptions {
         layout: if a.animate {
             Layout::Animation {
@@ -693,8 +686,8 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
             (_, Some(t)) => FrameSelect::Time(t),
             _ => FrameSelect::Last,
         },
-        view: a.view.parse().map_err(input)?,
-        field: a.field.parse().map_err(input)?,
+        view: a.view,
+        field: a.field,
         width,
         height,
         output: a.output,
@@ -705,7 +698,7 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     };
     // A drape tester seen from above: the pedestal and the specimen's
     // circle over the fabric, the measurement in the subtitle.
-    if a.view == "top"
+    if a.view == View::Top
         && opts.layout == Layout::Single
         && !a.no_obstacles
         && let Some((circles, caption)) = measure::top_view_overlay(&a.dir, opts.frame)
@@ -723,11 +716,11 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn plot(dir: &Path, output: Option<PathBuf>, size: Option<&str>) -> Result<(), Failure> {
+fn plot(dir: &Path, output: Option<PathBuf>, size: Option<(u32, u32)>) -> Result<(), Failure> {
     // A drape-tester run: its drape coefficient and folds frame by frame too.
     let extra = measure::drape_panels(dir).unwrap_or_default();
     let rows = if extra.is_empty() { 900 } else { 1200 };
-    let (width, height) = parse_size(size, (1200, rows))?;
+    let (width, height) = size.unwrap_or((1200, rows));
     let out = output.unwrap_or_else(|| dir.join("plot.png"));
     drape_render::plot_with(dir, &out, width, height, &extra)
         .map_err(|e| Failure::Input(anyhow::Error::new(e)))?;

@@ -1263,7 +1263,11 @@ const BAD_INPUTS: &[BadInput] = &[
     },
     BadInput {
         file: "unknown_component.toml",
-        fragments: &["`fix[0].components`", "\"x\", \"y\" or \"z\"", "not \"w\""],
+        fragments: &[
+            "`fix[0].components`",
+            "unknown variant `w`",
+            "`x`, `y`, `z`",
+        ],
         line: Some(20),
     },
     BadInput {

@@ -7,7 +7,8 @@
 //! a sweep's cases) and written out absolute: the text then means the same
 //! wherever it is saved — in `OUT/scenario.toml`, or in a sweep's case.
 
-use drape::scenario::{Scenario, ScenarioError, Setup};
+use drape::scenario::{Scenario, ScenarioError};
+use drape::setup::Setup;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};

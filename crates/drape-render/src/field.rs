@@ -200,6 +200,10 @@ impl FromStr for Field {
     }
 }
 
+// The command line's `--field`, by [`Field::name`].
+#[cfg(feature = "clap")]
+crate::value_enum_by_name!(Field);
+
 /// Formats a colour-bar or axis value with 4 significant digits, plain or
 /// in scientific notation (`-0.05`, `0.1523`, `1234`, `1.5e-7`), with an
 /// ASCII minus.

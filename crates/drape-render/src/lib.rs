@@ -46,6 +46,25 @@
 //! ```
 #![warn(missing_docs)]
 
+/// `clap::ValueEnum` for a choice that lists itself (`ALL`) and names
+/// itself (`name()`): the command line accepts exactly those names.
+#[cfg(feature = "clap")]
+macro_rules! value_enum_by_name {
+    ($choice:ty) => {
+        impl clap::ValueEnum for $choice {
+            fn value_variants<'a>() -> &'a [Self] {
+                &<$choice>::ALL
+            }
+
+            fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+                Some(clap::builder::PossibleValue::new(self.name()))
+            }
+        }
+    };
+}
+#[cfg(feature = "clap")]
+pub(crate) use value_enum_by_name;
+
 mod anim;
 mod colorbar;
 mod colormap;

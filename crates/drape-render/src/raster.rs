@@ -26,6 +26,9 @@ pub enum View {
 }
 
 impl View {
+    /// Every view, in the order of the help text.
+    pub const ALL: [View; 3] = [View::Top, View::Side, View::Perspective];
+
     /// The name used on the command line.
     pub fn name(self) -> &'static str {
         match self {
@@ -40,16 +43,20 @@ impl std::str::FromStr for View {
     type Err = crate::RenderError;
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s {
-            "top" => Ok(View::Top),
-            "side" => Ok(View::Side),
-            "perspective" => Ok(View::Perspective),
-            _ => Err(crate::RenderError::InvalidOption(format!(
-                "unknown view {s:?}; the views are top, side, perspective"
-            ))),
-        }
+        View::ALL
+            .into_iter()
+            .find(|v| v.name() == s)
+            .ok_or_else(|| {
+                crate::RenderError::InvalidOption(format!(
+                    "unknown view {s:?}; the views are top, side, perspective"
+                ))
+            })
     }
 }
+
+// The command line's `--view`, by [`View::name`].
+#[cfg(feature = "clap")]
+crate::value_enum_by_name!(View);
 
 impl std::fmt::Display for View {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

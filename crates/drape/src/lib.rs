@@ -6,7 +6,8 @@
 //! Saint-Venant–Kirchhoff in plane stress, implicit Newmark-beta dynamics
 //! solved by Newton–Raphson on a sparse Hessian.
 //!
-//! Data flows one way: [`scenario`] (a TOML file) → [`model::Model`] →
+//! Data flows one way: [`scenario`] (a TOML file) → [`setup::Setup`]
+//! (with its [`model::Model`]) →
 //! [`integrator`] (one time step) → [`solver`] (Newton, sparse linear
 //! solves) → [`output`] (history, fields, summary); [`simulation`] drives
 //! the loop. See `ARCHITECTURE.md` for the map.
@@ -30,7 +31,9 @@ pub mod model;
 pub mod output;
 pub mod par;
 pub mod psd;
+pub mod quadrature;
 pub mod scenario;
+pub mod setup;
 pub mod simulation;
 pub mod solver;
 pub mod vec3;

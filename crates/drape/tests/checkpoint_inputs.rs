@@ -9,8 +9,10 @@
 mod common;
 
 use common::temp_dir;
+use drape::input::fnv1a;
 use drape::output::pvd::frame_relative_path;
-use drape::scenario::{Scenario, Setup, fnv1a};
+use drape::scenario::Scenario;
+use drape::setup::Setup;
 use drape::simulation::{
     self, Checkpoint, RunControl, RunError, check_resume_inputs, checkpoint_path,
 };
@@ -296,8 +298,12 @@ fn as_version_3(bytes: &[u8]) -> Vec<u8> {
         }
         at += 8;
     }
+    // Version 6's kept linear-solver state ends the body: a direct solve
+    // keeps nothing, its two flags 0.
+    let kept = bytes.len() - 8 - 2;
+    assert_eq!(bytes[kept..kept + 2], [0, 0], "a direct run keeps nothing");
     let mut body = bytes[..inputs].to_vec();
-    body.extend_from_slice(&bytes[at..bytes.len() - 8]);
+    body.extend_from_slice(&bytes[at..kept]);
     // Magic, version, 4 header u64, 4 counters u64, 5 counter fields,
     // segment, step size, still steps, time, external work, persistence:
     // then the friction dissipation, which version 3 did not have.

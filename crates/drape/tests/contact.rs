@@ -326,7 +326,7 @@ fn pedestal_run(
     Vec<String>,
     Vec<Vec<f64>>,
     drape::simulation::Summary,
-    drape::scenario::Setup,
+    drape::setup::Setup,
 ) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../examples")
@@ -404,11 +404,11 @@ fn fabric_on_pedestal_runs_with_both_methods() {
 /// Steps a dynamic setup through its schedule (no cut-back), calling
 /// `check` after every step.
 fn drive(
-    s: &drape::scenario::Setup,
+    s: &drape::setup::Setup,
     mut check: impl FnMut(&drape::integrator::State),
 ) -> drape::integrator::State {
     use drape::integrator::newmark::DynamicWorkspace;
-    let drape::scenario::Analysis::Dynamic { newmark, segments } = &s.analysis else {
+    let drape::setup::Analysis::Dynamic { newmark, segments } = &s.analysis else {
         panic!("dynamic only")
     };
     let mut ws = DynamicWorkspace::new(&s.model).unwrap();
@@ -425,7 +425,7 @@ fn drive(
     state
 }
 
-fn example_setup(example: &str) -> drape::scenario::Setup {
+fn example_setup(example: &str) -> drape::setup::Setup {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../examples")
         .join(example);
@@ -435,7 +435,7 @@ fn example_setup(example: &str) -> drape::scenario::Setup {
 
 /// Largest distance between a node's final position mapped by a symmetry
 /// of the mesh pattern and the final position of the node it maps to.
-fn asymmetry(s: &drape::scenario::Setup, y: &[f64], map: impl Fn([f64; 3]) -> [f64; 3]) -> f64 {
+fn asymmetry(s: &drape::setup::Setup, y: &[f64], map: impl Fn([f64; 3]) -> [f64; 3]) -> f64 {
     let nodes = &s.model.mesh().nodes;
     let mut worst = 0.0f64;
     for (p, x) in nodes.iter().enumerate() {
@@ -519,7 +519,7 @@ fn asymmetry_growth() {
     });
 }
 
-fn patch_over(center: [f64; 2], method: &str) -> (drape::scenario::Setup, Vec<f64>) {
+fn patch_over(center: [f64; 2], method: &str) -> (drape::setup::Setup, Vec<f64>) {
     let contact = if method == "penalty" {
         "method = \"penalty\"\npenalty = 5.0e4"
     } else {

@@ -10,13 +10,13 @@
 //! at order 1e-2 or more.
 
 use drape::element::ElementGeometry;
-use drape::element::lagrange::ShapeFunctions;
 use drape::element::membrane::{Section, element_energy, element_force_hessian};
-use drape::element::quadrature::QuadratureRule;
 use drape::fd::{gradient_error, jacobian_error};
 use drape::load::pressure::{PressureQuadrature, add_pressure_force};
 use drape::material::SaintVenantKirchhoff;
+use drape::mesh::lagrange::ShapeFunctions;
 use drape::mesh::{ElementOrder, Mesh};
+use drape::quadrature::QuadratureRule;
 
 const ORDERS: [ElementOrder; 3] = [
     ElementOrder::Linear,

@@ -9,10 +9,10 @@
 //! (or of the ring where the fabric folds back), whose area the shoelace
 //! formula gives to rounding.
 
-use drape::element::lagrange::ShapeFunctions;
-use drape::element::quadrature::QuadratureRule;
 use drape::measure::{self, DrapeTester, Given, MeasureError, Surface};
+use drape::mesh::lagrange::ShapeFunctions;
 use drape::mesh::{ElementOrder, Mesh, generate};
+use drape::quadrature::QuadratureRule;
 use drape::scenario::Scenario;
 use std::f64::consts::{PI, TAU};
 use std::path::Path;

@@ -12,12 +12,12 @@ use common::{
 };
 use drape::element::ElementGeometry;
 use drape::element::membrane::{Section, element_energy, element_force_hessian};
-use drape::element::quadrature::QuadratureRule;
 use drape::fd::{gradient_error, jacobian_error};
 use drape::material::{Material, Orthotropic, WrinkleState, WrinklingModel};
 use drape::mesh::generate::{Pattern, rectangle};
 use drape::mesh::{ElementOrder, Mesh};
 use drape::model::Model;
+use drape::quadrature::QuadratureRule;
 
 const E1: f64 = 5.0e6;
 const E2: f64 = 1.0e6;
@@ -346,7 +346,7 @@ fn renumbering_an_elements_nodes_changes_nothing() {
 
 /// A curved, tilted element of `order` and a large deformation of it.
 fn curved_element(order: ElementOrder, stretch: [f64; 2]) -> (Mesh, Vec<f64>) {
-    let shape = drape::element::lagrange::ShapeFunctions::new(order);
+    let shape = drape::mesh::lagrange::ShapeFunctions::new(order);
     let nodes: Vec<[f64; 3]> = shape
         .nodes()
         .iter()

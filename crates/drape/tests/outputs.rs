@@ -14,7 +14,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 /// An 8 x 8 fabric falling onto a plane (so that contact forces are part
 /// of the frames), `steps` steps, a frame every `every` steps.
-fn scenario(steps: usize, every: usize) -> drape::scenario::Setup {
+fn scenario(steps: usize, every: usize) -> drape::setup::Setup {
     let text = fabric(&format!(
         r#"
 [[load]]

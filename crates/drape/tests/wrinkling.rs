@@ -275,7 +275,7 @@ fn chord_steps_save_a_fifth_of_the_factorisations_on_the_wrinkling_pedestal() {
 fn pedestal_steps(adaptive: bool) -> (usize, Vec<f64>, drape::model::Model) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/fabric-on-pedestal.toml");
     let s = setup(&std::fs::read_to_string(path).unwrap());
-    let drape::scenario::Analysis::Dynamic { newmark, segments } = &s.analysis else {
+    let drape::setup::Analysis::Dynamic { newmark, segments } = &s.analysis else {
         panic!("the pedestal is dynamic");
     };
     let model = &s.model;

@@ -29,8 +29,8 @@
 //! with `s_kl = +1` for `l = k + 2`, `-1` for `l = k + 1` (mod 3), 0 for
 //! `l = k`. The Hessian is symmetric block by block.
 
-use super::patch::Patch;
-use crate::vec3::{cross, dot, norm, scale, sub};
+use super::patch::{Patch, normal};
+use crate::vec3::{dot, scale, sub};
 
 /// Largest number of nodes of a patch.
 pub const MAX_NODES: usize = 6;
@@ -86,39 +86,6 @@ fn mul_t(a: &[[f64; 3]; 3], u: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-/// The curvatures `kappa` (Voigt: `kappa_11, kappa_22, 2 kappa_12`) of the
-/// patch at positions `x` (its nodes' positions, in the patch's order).
-pub fn curvature(patch: &Patch, x: &[[f64; 3]]) -> [f64; 3] {
-    let n = normal(x).0;
-    let mut kappa = [0.0; 3];
-    for (j, kj) in kappa.iter_mut().enumerate() {
-        let v = second_derivative(patch, x, j);
-        *kj = dot(n, v);
-    }
-    kappa
-}
-
-/// The unit normal of the patch's triangle and `|m|`, twice its area.
-#[inline]
-fn normal(x: &[[f64; 3]]) -> ([f64; 3], f64) {
-    let m = cross(sub(x[1], x[0]), sub(x[2], x[0]));
-    let r = norm(m);
-    (scale(m, 1.0 / r), r)
-}
-
-/// `v_j = sum_k C_jk x_k`.
-#[inline]
-fn second_derivative(patch: &Patch, x: &[[f64; 3]], j: usize) -> [f64; 3] {
-    let mut v = [0.0; 3];
-    for (k, xk) in x.iter().enumerate() {
-        let c = patch.coefficients[j][k];
-        for i in 0..3 {
-            v[i] += c * xk[i];
-        }
-    }
-    v
-}
-
 /// The moments `M = A D' (kappa - kappa_0)` of curvatures `kappa` and the
 /// energy `1/2 (kappa - kappa_0) . M`.
 #[inline]
@@ -131,7 +98,7 @@ fn moments(patch: &Patch, kappa: [f64; 3]) -> ([f64; 3], f64) {
 
 /// The bending energy of `patch` at `x` alone (J).
 pub fn energy(patch: &Patch, x: &[[f64; 3]]) -> f64 {
-    moments(patch, curvature(patch, x)).1
+    moments(patch, patch.curvature(x)).1
 }
 
 /// The bending energy of `patch` at `x`; with `hessian`, also its gradient
@@ -147,7 +114,7 @@ pub fn evaluate(patch: &Patch, x: &[[f64; 3]], hessian: bool, out: &mut Local) -
     let len = patch.len();
     debug_assert_eq!(x.len(), len);
     let (n, r) = normal(x);
-    let v = [0, 1, 2].map(|j| second_derivative(patch, x, j));
+    let v = [0, 1, 2].map(|j| patch.second_derivative(x, j));
     let kappa = v.map(|vj| dot(n, vj));
     let (m, energy) = moments(patch, kappa);
     let ad = &patch.stiffness;
@@ -274,6 +241,44 @@ pub fn evaluate(patch: &Patch, x: &[[f64; 3]], hessian: bool, out: &mut Local) -
     energy
 }
 
+/// Folds a patch's ghost's gradient and Hessian rows and columns in `local`
+/// (as the kernel wrote them, the ghost a node of its own) onto the
+/// vertex it mirrors — `g_v += R g_g`, `H <- J^T H J` with `dx_g / dx_v
+/// = R` — and zeroes them: the derivatives with respect to the patch's
+/// real nodes. Nothing without a ghost.
+pub fn fold(patch: &Patch, local: &mut Local, hessian: bool) {
+    let Some(g) = &patch.ghost else {
+        return;
+    };
+    let (s, v, r) = (3 * g.slot, 3 * g.vertex, &g.reflect);
+    let gs: [f64; 3] = std::array::from_fn(|i| local.gradient[s + i]);
+    for i in 0..3 {
+        local.gradient[v + i] += dot(r[i], gs);
+        local.gradient[s + i] = 0.0;
+    }
+    if !hessian {
+        return;
+    }
+    let n = 3 * patch.len();
+    let h = &mut local.hessian;
+    // Rows: H[v, :] += R H[s, :] (R symmetric), then zero row s.
+    for c in 0..n {
+        let hs: [f64; 3] = std::array::from_fn(|i| h[s + i][c]);
+        for i in 0..3 {
+            h[v + i][c] += dot(r[i], hs);
+            h[s + i][c] = 0.0;
+        }
+    }
+    // Columns: H[:, v] += H[:, s] R, then zero column s.
+    for row in h.iter_mut().take(n) {
+        let hs: [f64; 3] = std::array::from_fn(|j| row[s + j]);
+        for j in 0..3 {
+            row[v + j] += dot(r[j], hs);
+            row[s + j] = 0.0;
+        }
+    }
+}
+
 impl Local {
     /// Zeroed buffers.
     pub fn new() -> Self {
@@ -293,7 +298,7 @@ impl Default for Local {
 
 #[cfg(test)]
 mod tests {
-    //! [`evaluate`] and [`curvature`] on single patches: a skewed, irregular
+    //! [`evaluate`] and [`Patch::curvature`] on single patches: a skewed, irregular
     //! triangle (local nodes 0–2) and the three nodes opposite its edges
     //! (3: across edge 1–2, 4: across 2–0, 5: across 0–1), fitted flat or
     //! on a curved surface, at 1 cm. The finite-difference checks of the
@@ -302,7 +307,7 @@ mod tests {
 
     use super::*;
     use crate::bending::BendingRigidity;
-    use crate::vec3::add;
+    use crate::vec3::{add, cross, norm};
 
     /// The patch's size (m).
     const H: f64 = 0.01;
@@ -751,14 +756,14 @@ mod tests {
             }
             let want = voigt([[2.0 * a, b], [b, 2.0 * c]]);
             let what = format!("z = {a} x^2 + {b} xy + {c} y^2 + ...");
-            assert_close(curvature(&patch, &x), want, 1e-9, &what);
+            assert_close(patch.curvature(&x), want, 1e-9, &what);
             // As a reference: its rest curvature.
             let curved = Patch::fit([0, 1, 2], ALL, &x, &d, None, None).unwrap();
             assert_close(curved.rest, want, 1e-9, &format!("reference {what}"));
             // The energy is 1/2 e . (A D') e, e = kappa - kappa_0.
             let mut out = Local::new();
             let energy = evaluate(&patch, &x, false, &mut out);
-            let e = curvature(&patch, &x);
+            let e = patch.curvature(&x);
             let s = &patch.stiffness;
             let want_energy: f64 = 0.5
                 * (0..3)
@@ -775,7 +780,7 @@ mod tests {
             let turned = Patch::fit([0, 1, 2], ALL, &flat, &d, Some([cs, sn, 0.3]), None).unwrap();
             let rotated = voigt_along([[2.0 * a, b], [b, 2.0 * c]], [cs, sn]);
             assert_close(
-                curvature(&turned, &x),
+                turned.curvature(&x),
                 rotated,
                 1e-9,
                 &format!("turned, {what}"),
@@ -809,7 +814,7 @@ mod tests {
         };
         let second: [[f64; 3]; 3] = [0, 1, 2].map(|j| std::array::from_fn(|i| voigt(hess[i])[j]));
         let want = second.map(|v| dot(n, v));
-        assert_close(curvature(&patch, &x), want, 1e-9, "quadratic map");
+        assert_close(patch.curvature(&x), want, 1e-9, "quadratic map");
     }
 
     /// A quadratic `f = a x^2 + b xy + c y^2 + d x + e y` zero at the

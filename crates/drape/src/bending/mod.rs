@@ -442,7 +442,7 @@ impl Bending {
                 let len = nodes.len();
                 p.positions(|a| [y[3 * a], y[3 * a + 1], y[3 * a + 2]], &mut x);
                 energy += kernel::evaluate(p, &x[..len], want_h, local);
-                p.fold(local, want_h);
+                kernel::fold(p, local, want_h);
                 if want_h && project.is_some_and(|flags| nodes.iter().any(|&a| flags[a])) {
                     crate::psd::project(
                         local.hessian.as_flattened_mut(),

@@ -52,7 +52,7 @@
 //! the curvature `2 w / h^2` of a clamp at that node, where the held
 //! triangle beyond gave `w / h^2`, a clamp half an element further. The
 //! ghost moves with `x_m`, so its derivatives are folded onto `x_m` by
-//! `R` ([`Patch::fold`]).
+//! `R` ([`super::kernel::fold`]).
 //!
 //! The patch is the rotation-free triangle of Oñate & Zárate (2000,
 //! "Rotation-free triangular plate and shell elements", Int. J. Numer.
@@ -146,44 +146,6 @@ impl Patch {
         }
         if let Some(g) = &self.ghost {
             out[g.slot] = g.position(out[g.vertex]);
-        }
-    }
-
-    /// Folds the ghost's gradient and Hessian rows and columns in `local`
-    /// (as the kernel wrote them, the ghost a node of its own) onto the
-    /// vertex it mirrors — `g_v += R g_g`, `H <- J^T H J` with `dx_g / dx_v
-    /// = R` — and zeroes them: the derivatives with respect to the patch's
-    /// real nodes. Nothing without a ghost.
-    pub fn fold(&self, local: &mut super::kernel::Local, hessian: bool) {
-        let Some(g) = &self.ghost else {
-            return;
-        };
-        let (s, v, r) = (3 * g.slot, 3 * g.vertex, &g.reflect);
-        let gs: [f64; 3] = std::array::from_fn(|i| local.gradient[s + i]);
-        for i in 0..3 {
-            local.gradient[v + i] += dot(r[i], gs);
-            local.gradient[s + i] = 0.0;
-        }
-        if !hessian {
-            return;
-        }
-        let n = 3 * self.len();
-        let h = &mut local.hessian;
-        // Rows: H[v, :] += R H[s, :] (R symmetric), then zero row s.
-        for c in 0..n {
-            let hs: [f64; 3] = std::array::from_fn(|i| h[s + i][c]);
-            for i in 0..3 {
-                h[v + i][c] += dot(r[i], hs);
-                h[s + i][c] = 0.0;
-            }
-        }
-        // Columns: H[:, v] += H[:, s] R, then zero column s.
-        for row in h.iter_mut().take(n) {
-            let hs: [f64; 3] = std::array::from_fn(|j| row[s + j]);
-            for j in 0..3 {
-                row[v + j] += dot(r[j], hs);
-                row[s + j] = 0.0;
-            }
         }
     }
 
@@ -311,9 +273,44 @@ impl Patch {
         };
         let mut xs = [[0.0; 3]; 6];
         patch.positions(|a| x[a], &mut xs);
-        patch.rest = super::kernel::curvature(&patch, &xs[..len]);
+        patch.rest = patch.curvature(&xs[..len]);
         Ok(patch)
     }
+
+    /// The curvatures `kappa` (Voigt: `kappa_11, kappa_22, 2 kappa_12`) of the
+    /// patch at positions `x` (its nodes' positions, in the patch's order):
+    /// `kappa_j = n . v_j` ([`super::kernel`] has the symbols).
+    pub fn curvature(&self, x: &[[f64; 3]]) -> [f64; 3] {
+        let n = normal(x).0;
+        let mut kappa = [0.0; 3];
+        for (j, kj) in kappa.iter_mut().enumerate() {
+            let v = self.second_derivative(x, j);
+            *kj = dot(n, v);
+        }
+        kappa
+    }
+
+    /// `v_j = sum_k C_jk x_k`.
+    #[inline]
+    pub(super) fn second_derivative(&self, x: &[[f64; 3]], j: usize) -> [f64; 3] {
+        let mut v = [0.0; 3];
+        for (k, xk) in x.iter().enumerate() {
+            let c = self.coefficients[j][k];
+            for i in 0..3 {
+                v[i] += c * xk[i];
+            }
+        }
+        v
+    }
+}
+
+/// The unit normal of the patch's triangle (its first three positions in
+/// `x`) and `|m|`, twice its area.
+#[inline]
+pub(super) fn normal(x: &[[f64; 3]]) -> ([f64; 3], f64) {
+    let m = cross(sub(x[1], x[0]), sub(x[2], x[0]));
+    let r = norm(m);
+    (scale(m, 1.0 / r), r)
 }
 
 impl Ghost {

@@ -12,9 +12,9 @@
 //! axes, whatever the node numbering. The projection must be at least
 //! [`AXIS_MIN_PROJECTION`] of `|a|` long.
 
-use super::lagrange::ShapeFunctions;
-use super::quadrature::QuadratureRule;
 use crate::mesh::Mesh;
+use crate::mesh::lagrange::ShapeFunctions;
+use crate::quadrature::QuadratureRule;
 use crate::vec3::{cross, dot, norm, scale, sub};
 
 /// The shortest projection of a material axis on an element's plane, as a
@@ -118,7 +118,7 @@ impl ElementGeometry {
         let ne = mesh.element_count();
         let mut grad = Vec::with_capacity(ne * nq * n);
         let mut weight = Vec::with_capacity(ne * nq);
-        let mut x = [[0.0; 3]; super::lagrange::MAX_NODES];
+        let mut x = [[0.0; 3]; crate::mesh::lagrange::MAX_NODES];
         for (element, el) in mesh.elements().enumerate() {
             for (a, &node) in el.iter().enumerate() {
                 x[a] = mesh.nodes[node];

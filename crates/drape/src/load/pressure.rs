@@ -19,9 +19,9 @@
 //! assembled tangent is the (symmetric) Hessian of `-p V` with `V` the
 //! enclosed volume.
 
-use crate::element::lagrange::{MAX_NODES, ShapeFunctions};
-use crate::element::quadrature::QuadratureRule;
 use crate::mesh::ElementOrder;
+use crate::mesh::lagrange::{MAX_NODES, ShapeFunctions};
+use crate::quadrature::QuadratureRule;
 use crate::vec3::cross;
 
 /// Shape function values and reference derivatives at the points of the

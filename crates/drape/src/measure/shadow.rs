@@ -50,8 +50,8 @@
 //! sub-triangles reach [`MAX_TRIANGLES`]; the bound is reported either way.
 
 use super::{Horizontal, MeasureError, Surface};
-use crate::element::lagrange::{ShapeFunctions, reference_nodes};
 use crate::mesh::ElementOrder;
+use crate::mesh::lagrange::{ShapeFunctions, reference_nodes};
 use i_overlay::core::fill_rule::FillRule;
 use i_overlay::core::overlay_rule::OverlayRule;
 use i_overlay::float::overlay::FloatOverlay;

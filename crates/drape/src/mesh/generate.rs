@@ -244,7 +244,7 @@ mod tests {
     fn total_area(mesh: &Mesh) -> f64 {
         let g = crate::element::ElementGeometry::new(
             mesh,
-            &crate::element::quadrature::QuadratureRule::of_degree(2 * mesh.order.degree()),
+            &crate::quadrature::QuadratureRule::of_degree(2 * mesh.order.degree()),
         );
         (0..mesh.element_count()).map(|e| g.area(e)).sum()
     }

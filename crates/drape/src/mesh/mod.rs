@@ -14,10 +14,12 @@
 //!
 //! Meshes come from the generators in [`generate`] or the readers in
 //! [`gmsh`] and [`obj`]; every mesh is checked by [`Mesh::validate`] before
-//! use.
+//! use. The shape functions of its triangles, which map the reference
+//! triangle onto each element, are in [`lagrange`].
 
 pub mod generate;
 pub mod gmsh;
+pub mod lagrange;
 pub mod obj;
 pub mod polygon;
 mod read_error;
@@ -148,6 +150,13 @@ impl Mesh {
             }
         }
         (lo, hi)
+    }
+
+    /// The length of the diagonal of the bounding box (m): the mesh's size
+    /// in tolerances and messages.
+    pub fn diagonal(&self) -> f64 {
+        let (lo, hi) = self.bounding_box();
+        ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
     }
 
     /// Index of the node whose initial position is nearest to `point`, and

@@ -3,7 +3,7 @@
 //! triangles.
 
 use super::Mesh;
-use crate::element::lagrange::ShapeFunctions;
+use super::lagrange::ShapeFunctions;
 use crate::vec3::{cross, dot, norm, sub};
 
 /// Why a mesh cannot be used. Element and node numbers are 0-based indices

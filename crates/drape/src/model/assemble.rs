@@ -12,11 +12,11 @@
 //! zeroed first.
 
 use super::Model;
-use crate::element::lagrange::MAX_NODES;
 use crate::element::membrane::{
     element_force_hessian_or_zero, element_stress_state, principal_values,
 };
 use crate::load::pressure::add_pressure_force;
+use crate::mesh::lagrange::MAX_NODES;
 use crate::par::Shared;
 use rayon::prelude::*;
 

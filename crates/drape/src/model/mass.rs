@@ -2,9 +2,9 @@
 
 use super::ModelError;
 use crate::element::geometry::tangents;
-use crate::element::lagrange::{MAX_NODES, ShapeFunctions};
-use crate::element::quadrature::QuadratureRule;
+use crate::mesh::lagrange::{MAX_NODES, ShapeFunctions};
 use crate::mesh::{ElementOrder, Mesh};
+use crate::quadrature::QuadratureRule;
 use crate::solver::SparsePattern;
 use crate::vec3::{cross, norm};
 

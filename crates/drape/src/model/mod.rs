@@ -17,11 +17,11 @@ use crate::bending::{Bending, BendingRigidity};
 use crate::contact::ContactModel;
 use crate::element::ElementGeometry;
 use crate::element::membrane::Section;
-use crate::element::quadrature::QuadratureRule;
 use crate::load::pressure::PressureQuadrature;
 use crate::load::{Load, LoadKind};
 use crate::material::Material;
 use crate::mesh::Mesh;
+use crate::quadrature::QuadratureRule;
 use crate::solver::SparsePattern;
 use crate::solver::pattern::colour_elements;
 

@@ -2,11 +2,10 @@
 //! parameters and the schedule's segments of a dynamic analysis, with its
 //! adaptive steps and rest criterion, or the increments of a static one.
 
-use super::build::Analysis;
 use super::check::Checker;
 use super::{AnalysisKind, Scenario, ScenarioError, SegmentSpec, TimeSpec};
 use crate::integrator::Newmark;
-use crate::simulation::schedule::{AdaptiveSteps, RestCriterion};
+use crate::setup::{AdaptiveSteps, Analysis, RestCriterion};
 
 /// `[analysis]` and `[time]`: how time (or load) advances, with the
 /// adaptive steps and the rest criterion of a dynamic analysis.
@@ -39,9 +38,11 @@ pub(super) fn build_analysis(
             )?;
             let newmark = build_newmark(c, &time)?;
             let segments = build_segments(c, &specs)?;
-            let adaptive = build_adaptive(c, &time, &segments)?;
+            let analysis = Analysis::Dynamic { newmark, segments };
+            check_totals(c, &analysis)?;
+            let adaptive = build_adaptive(c, &time, &analysis.schedule())?;
             let rest = build_rest(c, &time)?;
-            Ok((Analysis::Dynamic { newmark, segments }, adaptive, rest))
+            Ok((analysis, adaptive, rest))
         }
         AnalysisKind::Static => {
             if let Some(time) = &s.time {
@@ -132,12 +133,17 @@ fn build_segments(c: &Checker, specs: &[SegmentSpec]) -> Result<Vec<(usize, f64)
         }
         segments.push((s.steps, s.dt));
     }
-    // The schedule's totals must exist: the step count in an integer, the
-    // end time in a finite number (1e308 s steps add up to infinity).
+    Ok(segments)
+}
+
+/// The schedule's totals must exist: the step count in an integer, the
+/// end time in a finite number (1e308 s steps add up to infinity).
+fn check_totals(c: &Checker, analysis: &Analysis) -> Result<(), ScenarioError> {
+    let segments = analysis.schedule();
     let steps = segments
         .iter()
         .try_fold(0usize, |n, (steps, _)| n.checked_add(*steps));
-    let end: f64 = segments.iter().map(|(n, dt)| *n as f64 * dt).sum();
+    let end = analysis.end_time();
     if steps.is_none() || !end.is_finite() {
         return Err(c.invalid(
             "time",
@@ -150,7 +156,7 @@ fn build_segments(c: &Checker, specs: &[SegmentSpec]) -> Result<Vec<(usize, f64)
             ),
         ));
     }
-    Ok(segments)
+    Ok(())
 }
 
 /// The adaptive steps of `[time]`, or `None` without `adaptive = true`;

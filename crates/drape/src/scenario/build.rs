@@ -5,15 +5,15 @@ use super::check::Checker;
 use super::contact::{build_contact, check_initial_penetration};
 use super::material::{build_bending, build_material};
 use super::{
-    AnalysisKind, BoxSpec, FixSpec, LoadKindSpec, LoadSpec, MeshShape, MeshSpec, MonitorSpec,
-    Scenario, ScenarioError, SolverSpec,
+    AnalysisKind, BoxSpec, Component, FixSpec, LoadKindSpec, LoadSpec, MeshShape, MeshSpec,
+    MonitorSpec, Scenario, ScenarioError, SolverSpec,
 };
 use crate::bending::BendingError;
-use crate::integrator::Newmark;
+use crate::input::{InputFile, fnv1a};
 use crate::load::{Load, LoadKind};
 use crate::mesh::{ElementOrder, MAX_MESH_NODES, Mesh, MeshReadError, generate};
 use crate::model::{Model, ModelError};
-use crate::simulation::schedule::{AdaptiveSteps, RestCriterion};
+use crate::setup::{Monitor, Setup};
 use crate::solver::NewtonSettings;
 use std::path::{Path, PathBuf};
 
@@ -25,128 +25,6 @@ pub const MAX_COORDINATE: f64 = 1.0e6;
 /// The largest elastic modulus (Pa): a thousand times diamond's. Beyond
 /// it the membrane's forces and the Newton residual's norm overflow.
 pub const MAX_MODULUS: f64 = 1.0e15;
-
-/// A node whose position is recorded in the history.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Monitor {
-    /// Name from the scenario.
-    pub name: String,
-    /// Node index.
-    pub node: usize,
-}
-
-/// How time (or load) advances.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Analysis {
-    /// Newmark dynamics over a schedule of `(steps, dt)` segments.
-    Dynamic {
-        /// Newmark parameters.
-        newmark: Newmark,
-        /// `(steps, dt)` segments.
-        segments: Vec<(usize, f64)>,
-    },
-    /// Static load stepping in `steps` equal increments.
-    Static {
-        /// Increments.
-        steps: usize,
-    },
-}
-
-/// Everything needed to run a scenario.
-#[derive(Debug)]
-pub struct Setup {
-    /// Title.
-    pub title: String,
-    /// The discrete model.
-    pub model: Model,
-    /// Dynamic or static.
-    pub analysis: Analysis,
-    /// Adaptive time steps (`[time] adaptive = true`); `None`: the
-    /// segments' fixed steps (and always in statics).
-    pub adaptive: Option<AdaptiveSteps>,
-    /// The rest criterion (`[time] rest`), if any (dynamic analysis only).
-    pub rest: Option<RestCriterion>,
-    /// Newton settings.
-    pub newton: NewtonSettings,
-    /// Most halvings of a failing step.
-    pub max_cutbacks: usize,
-    /// Field output interval (steps).
-    pub output_every: usize,
-    /// Monitored nodes.
-    pub monitors: Vec<Monitor>,
-    /// Write a checkpoint every this many scheduled steps (with adaptive
-    /// steps: converged steps; 0: never).
-    pub checkpoint_every: usize,
-    /// How linear systems are solved.
-    pub linear: crate::solver::LinearMode,
-    /// The scenario file (absolute when it could be resolved).
-    pub scenario_path: PathBuf,
-    /// FNV-1a hash of the scenario text: a resumed run refuses a changed scenario.
-    pub scenario_hash: u64,
-    /// The files the scenario reads (the mesh, the obstacles' meshes), in
-    /// scenario order, with the hash of the bytes read: a resumed run
-    /// refuses a changed one.
-    pub inputs: Vec<InputFile>,
-}
-
-/// FNV-1a's initial state (its offset basis).
-const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
-
-/// 64-bit FNV-1a of `bytes`: stable across platforms and Rust versions.
-pub fn fnv1a(bytes: &[u8]) -> u64 {
-    fnv1a_extend(FNV_OFFSET, bytes)
-}
-
-/// FNV-1a continued from the state `h` over `bytes`: hashing a file in
-/// pieces gives [`fnv1a`] of the whole (see [`InputFile::hash_file`]).
-pub(crate) fn fnv1a_extend(mut h: u64, bytes: &[u8]) -> u64 {
-    for b in bytes {
-        h ^= u64::from(*b);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
-
-/// A file a scenario reads, as it was when the setup was built.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct InputFile {
-    /// The scenario key that names it: `mesh.path`, `obstacle[1].path`.
-    pub key: String,
-    /// Its path (absolute when it could be resolved).
-    pub path: PathBuf,
-    /// [`fnv1a`] of its bytes.
-    pub hash: u64,
-}
-
-impl InputFile {
-    /// The input read from `path` under `key`, whose bytes were `bytes`.
-    pub(crate) fn new(key: String, path: &Path, bytes: &[u8]) -> Self {
-        Self {
-            key,
-            path: std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf()),
-            hash: fnv1a(bytes),
-        }
-    }
-
-    /// [`fnv1a`] of the file at `path` now, read in pieces (a mesh may be
-    /// large). Anything but a regular file is refused before it is opened
-    /// (a FIFO would block).
-    pub fn hash_file(path: &Path) -> std::io::Result<u64> {
-        use std::io::Read;
-        crate::input::check_regular(path)?;
-        let mut file = std::fs::File::open(path)?;
-        let mut buffer = vec![0u8; 1 << 16];
-        let mut h = FNV_OFFSET;
-        loop {
-            match file.read(&mut buffer) {
-                Ok(0) => return Ok(h),
-                Ok(n) => h = fnv1a_extend(h, &buffer[..n]),
-                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(e),
-            }
-        }
-    }
-}
 
 impl Scenario {
     /// Checks every value and builds the [`Setup`]. `file` is the scenario's
@@ -232,13 +110,6 @@ impl Scenario {
     }
 }
 
-/// The length of the diagonal of `mesh`'s bounding box (m): the mesh's size
-/// in tolerances and messages.
-pub(super) fn diagonal(mesh: &Mesh) -> f64 {
-    let (lo, hi) = mesh.bounding_box();
-    ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
-}
-
 /// `[solver]`: Newton's settings, each in its range (`linear` and
 /// `max_cutbacks`, once checked, are taken as they are).
 fn build_newton(c: &Checker, s: &SolverSpec) -> Result<NewtonSettings, ScenarioError> {
@@ -308,7 +179,7 @@ fn build_monitors(
     mesh: &Mesh,
     specs: &[MonitorSpec],
 ) -> Result<Vec<Monitor>, ScenarioError> {
-    let size = diagonal(mesh);
+    let size = mesh.diagonal();
     let mut monitors = Vec::new();
     for (i, mon) in specs.iter().enumerate() {
         if mon.name.is_empty()
@@ -770,7 +641,7 @@ fn select(
     within: &Option<BoxSpec>,
     boundary: Option<bool>,
 ) -> Result<Vec<usize>, ScenarioError> {
-    let size = diagonal(mesh);
+    let size = mesh.diagonal();
     let mut nodes: Vec<usize> = (0..mesh.node_count()).collect();
     let mut any = false;
     if let Some(at) = at {
@@ -826,7 +697,7 @@ fn build_fix(
 ) -> Result<(), ScenarioError> {
     let nodes = select(c, mesh, "fix", i, f.at, &f.within, f.boundary)?;
     let components = match &f.components {
-        None => vec![0, 1, 2],
+        None => &[Component::X, Component::Y, Component::Z][..],
         Some(list) if list.is_empty() => {
             return Err(c.invalid(
                 "fix",
@@ -835,36 +706,27 @@ fn build_fix(
                 "must list at least one of \"x\", \"y\", \"z\"".into(),
             ));
         }
-        Some(list) => list
-            .iter()
-            .map(|s| match s.as_str() {
-                "x" => Ok(0),
-                "y" => Ok(1),
-                "z" => Ok(2),
-                other => Err(c.invalid(
-                    "fix",
-                    Some(i),
-                    "components",
-                    format!("must be \"x\", \"y\" or \"z\", not {other:?}"),
-                )),
-            })
-            .collect::<Result<_, _>>()?,
+        Some(list) => list,
     };
     let clamp = f.clamp.unwrap_or(false);
-    if clamp && components.len() < 3 {
+    let all = [Component::X, Component::Y, Component::Z];
+    if clamp && !all.iter().all(|k| components.contains(k)) {
+        let names: Vec<&str> = components
+            .iter()
+            .map(|k| ["x", "y", "z"][k.index()])
+            .collect();
         return Err(c.invalid(
             "fix",
             Some(i),
             "clamp",
             format!(
-                "= true needs the nodes held in all three components (a clamp holds the fabric's position and its slope), but components = {:?}; drop `components` or `clamp`",
-                f.components.as_deref().unwrap_or_default()
+                "= true needs the nodes held in all three components (a clamp holds the fabric's position and its slope), but components = {names:?}; drop `components` or `clamp`"
             ),
         ));
     }
     for n in nodes {
-        for &k in &components {
-            fixed[3 * n + k] = true;
+        for k in components {
+            fixed[3 * n + k.index()] = true;
         }
         clamped[n] |= clamp;
     }

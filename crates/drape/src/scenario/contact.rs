@@ -2,11 +2,11 @@
 //! chosen by its `method` (each method's own struct, read by
 //! [`super::tagged`]); the contact model built from it and the obstacles.
 
-use super::InputFile;
 use super::check::Checker;
 use super::obstacle::build_body;
 use super::{Scenario, ScenarioError};
 use crate::contact::{ContactMethod, ContactModel};
+use crate::input::InputFile;
 use crate::mesh::Mesh;
 use serde::Deserialize;
 use std::path::Path;
@@ -168,7 +168,7 @@ pub(super) fn check_initial_penetration(
     mesh: &Mesh,
     contact: &ContactModel,
 ) -> Result<(), ScenarioError> {
-    let size = super::build::diagonal(mesh);
+    let size = mesh.diagonal();
     // Nodes, and the centroids and edge midpoints of the elements' vertex
     // triangles: an obstacle smaller than an element can sit between nodes.
     let mut probes: Vec<[f64; 3]> = mesh.nodes.clone();

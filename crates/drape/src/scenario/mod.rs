@@ -1,5 +1,5 @@
 //! The scenario file (TOML): its keys, their defaults and ranges, and the
-//! construction of a [`Setup`] (model, schedule, monitors) from it.
+//! construction of a [`Setup`](crate::setup::Setup) (model, schedule, monitors) from it.
 //!
 //! Every key is documented on its field (here, in `obstacle` for the
 //! `[[obstacle]]` shapes and in `contact` for the `[contact]` methods); the
@@ -27,7 +27,7 @@ mod material;
 mod obstacle;
 mod tagged;
 
-pub use build::{Analysis, InputFile, Monitor, Setup, fnv1a, read_mesh_file};
+pub use build::read_mesh_file;
 pub use contact::{ContactMethodName, ContactSpec, LagrangeSpec, PenaltySpec};
 pub use obstacle::{
     BoxObstacleSpec, CylinderObstacleSpec, MeshObstacleSpec, ObstacleShape, ObstacleSpec,
@@ -309,12 +309,35 @@ pub struct FixSpec {
     /// Every node on the mesh's free edge (combine with `within` to take part of it).
     pub boundary: Option<bool>,
     /// Which components are fixed: any of `"x"`, `"y"`, `"z"`. Default: all three.
-    pub components: Option<Vec<String>>,
+    pub components: Option<Vec<Component>>,
     /// A clamp (SPEC §6.6): the held nodes also hold the fabric's slope
     /// across the boundary between them and the free nodes, so that a
     /// cantilever's free length starts at the last held node. Needs all
     /// three components. Default false.
     pub clamp: Option<bool>,
+}
+
+/// A component of a node's position, as `[[fix]] components` names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Component {
+    /// `"x"`.
+    X,
+    /// `"y"`.
+    Y,
+    /// `"z"`.
+    Z,
+}
+
+impl Component {
+    /// Its index in a node's position `[x, y, z]`.
+    pub fn index(self) -> usize {
+        match self {
+            Component::X => 0,
+            Component::Y => 1,
+            Component::Z => 2,
+        }
+    }
 }
 
 /// `[analysis]`.

@@ -2,13 +2,14 @@
 //! (each shape's own struct, read by [`super::tagged`]), and its
 //! construction.
 
+use super::ScenarioError;
 use super::check::Checker;
-use super::{InputFile, ScenarioError};
 use crate::contact::obstacle::{
     BoxObstacle, CylinderObstacle, PlaneObstacle, Rounded, SphereObstacle,
     read_mesh_obstacle_with_bytes,
 };
 use crate::contact::{Obstacle, ObstacleError, RigidBody};
+use crate::input::InputFile;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use toml::de::ValueDeserializer;

@@ -56,8 +56,9 @@
 
 use crate::contact::ContactState;
 use crate::contact::lagrange::MAX_ACTIVE_SET_ROUNDS;
+use crate::input::{InputFile, fnv1a};
 use crate::integrator::State;
-use crate::scenario::{Analysis, InputFile, Setup, fnv1a};
+use crate::setup::{Analysis, Setup};
 use crate::simulation::schedule::REST_STEPS;
 use crate::solver::{KeptFactor, KeptLinear, KeptMultigrid, LinearStats};
 use std::path::{Path, PathBuf};
@@ -613,11 +614,8 @@ impl Checkpoint {
     fn fits(&self, setup: &Setup) -> Result<(), CheckpointError> {
         let c = &self.counters;
         let time = self.state.time;
-        let segments: Vec<(usize, f64)> = match &setup.analysis {
-            Analysis::Dynamic { segments, .. } => segments.clone(),
-            Analysis::Static { steps } => vec![(*steps, 1.0 / *steps as f64)],
-        };
-        let end_time: f64 = segments.iter().map(|(n, dt)| *n as f64 * dt).sum();
+        let segments = setup.analysis.schedule();
+        let end_time = setup.analysis.end_time();
         // Times are sums of steps: round-off, relative to the schedule.
         let slack = 1e-9 * end_time;
         let halvings = setup.max_cutbacks.min(1000);

@@ -37,7 +37,7 @@ use crate::integrator::{State, StaticStepper, StepEnergies};
 use crate::model::Model;
 use crate::output::atomic::write_atomic;
 use crate::output::history::HistoryWriter;
-use crate::scenario::{Analysis, Setup};
+use crate::setup::{Analysis, Setup};
 use crate::solver::NewtonError;
 pub use checkpoint::{Checkpoint, CheckpointError, Counters};
 use frames::Snapshot;
@@ -376,13 +376,7 @@ fn run_session(
         .map_err(|e| setup_failure(setup, out, start, SetupError::LinearSolver(e)))?;
     let x = model.initial_positions();
     let length = reference_length(&x);
-    let (schedule, end_time): (Vec<(usize, f64)>, f64) = match &setup.analysis {
-        Analysis::Dynamic { segments, .. } => (
-            segments.clone(),
-            segments.iter().map(|(n, dt)| *n as f64 * dt).sum(),
-        ),
-        Analysis::Static { steps } => (vec![(*steps, 1.0 / *steps as f64)], 1.0),
-    };
+    let (schedule, end_time) = (setup.analysis.schedule(), setup.analysis.end_time());
     let Start {
         state,
         counters,

@@ -5,24 +5,7 @@
 //! nodes' speeds, never the model, so that the run loop
 //! ([`super::run_with`]) decides with them and they are tested alone.
 
-/// `[time] adaptive = true`: the settings of the [`StepController`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AdaptiveSteps {
-    /// Largest step (s); `None`: [`DEFAULT_DT_MAX_FACTOR`] times each
-    /// segment's own `dt`.
-    pub dt_max: Option<f64>,
-}
-
-/// `[time] rest`: the run ends, completed, once every node has been slower
-/// than `speed` for [`REST_STEPS`] consecutive converged steps ending at
-/// `t >= after`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RestCriterion {
-    /// Speed (m/s) every node must stay below, > 0.
-    pub speed: f64,
-    /// Steps ending before this time (s) do not count, >= 0.
-    pub after: f64,
-}
+use crate::setup::{AdaptiveSteps, RestCriterion};
 
 /// Consecutive converged steps the rest criterion needs.
 pub const REST_STEPS: usize = 10;

@@ -6,7 +6,7 @@
 use super::{RunError, io_err, warnings};
 use crate::integrator::State;
 use crate::output::atomic::write_atomic;
-use crate::scenario::Setup;
+use crate::setup::Setup;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;

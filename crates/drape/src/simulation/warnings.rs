@@ -19,7 +19,7 @@
 //!   the compression.
 
 use super::schedule::{DEFAULT_DT_MAX_FACTOR, END_TOLERANCE, REST_STEPS};
-use crate::scenario::{Analysis, Setup};
+use crate::setup::{Analysis, Setup};
 use crate::vec3::{norm, sub};
 
 /// The largest motion of an obstacle in one step, as a fraction of the
@@ -61,7 +61,7 @@ fn rest_after_the_end(setup: &Setup, out: &mut Vec<String>) {
     let (Some(rest), Analysis::Dynamic { segments, .. }) = (&setup.rest, &setup.analysis) else {
         return;
     };
-    let end: f64 = segments.iter().map(|&(steps, dt)| steps as f64 * dt).sum();
+    let end = setup.analysis.end_time();
     if rest.after >= end {
         out.push(format!(
             "time.rest.after = {} s is at or after the schedule's end (t = {end} s): the rest criterion can never be met, and the run will end at t = {end} s whether or not the fabric is at rest",

@@ -5,6 +5,7 @@
 
 use super::Factorization;
 use super::block_lu::BlockLuError;
+use super::faer_failure::FaerFailure;
 use faer::sparse::FaerError;
 
 /// A linear solve that could not be done: of which matrix, and why.
@@ -104,37 +105,6 @@ impl std::fmt::Display for FactorStage {
             FactorStage::CholeskyAnalysis => "sparse Cholesky analysis",
             FactorStage::LuAnalysis => "sparse LU analysis",
             FactorStage::LuFactorization => "sparse LU factorisation",
-        })
-    }
-}
-
-/// Why faer failed whatever the values: [`FaerError`] in words.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FaerFailure {
-    /// An allocation failed.
-    OutOfMemory,
-    /// An index exceeded what the index type holds.
-    IndexOverflow,
-    /// A reason this version of drape does not know.
-    Other,
-}
-
-impl From<FaerError> for FaerFailure {
-    fn from(e: FaerError) -> Self {
-        match e {
-            FaerError::OutOfMemory => FaerFailure::OutOfMemory,
-            FaerError::IndexOverflow => FaerFailure::IndexOverflow,
-            _ => FaerFailure::Other,
-        }
-    }
-}
-
-impl std::fmt::Display for FaerFailure {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            FaerFailure::OutOfMemory => "out of memory",
-            FaerFailure::IndexOverflow => "an index overflowed",
-            FaerFailure::Other => "an unknown error",
         })
     }
 }

@@ -1,7 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use drape::scenario::{Scenario, Setup};
+use drape::scenario::Scenario;
+use drape::setup::Setup;
 use std::path::{Path, PathBuf};
 
 /// A fresh, empty directory under the system's temp dir, unique to this

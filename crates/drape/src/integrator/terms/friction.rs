@@ -217,7 +217,7 @@ mod tests {
     /// A 10 cm patch of 4 x 4 squares pressed 1 mm (vertically) into a
     /// plane tilted about y, moving along x at 1 cm/s, with friction 0.4 and a slip speed of 1e-3 m/s, over a
     /// step of 10 ms from its start: the smoothing slip is 1e-5 m.
-    fn pressed_patch() -> (crate::scenario::Setup, Vec<f64>) {
+    fn pressed_patch() -> (crate::setup::Setup, Vec<f64>) {
         let text = PRESSED;
         let path = Path::new("friction.toml");
         let setup = Scenario::parse(text, path)
@@ -261,7 +261,7 @@ segments = [{ steps = 1, dt = 1e-2 }]
     /// The friction term of [`pressed_patch`] over a 10 ms step from
     /// `start`, and the contact state it was lagged from.
     fn lagged<'a>(
-        setup: &'a crate::scenario::Setup,
+        setup: &'a crate::setup::Setup,
         start: &[f64],
     ) -> (FrictionTerm<'a>, crate::contact::ContactState) {
         let model = &setup.model;

@@ -107,7 +107,7 @@ segments = [{ steps = 1, dt = 1e-3 }]
     /// The patch of [`PATCH_IN_SPHERE`] with `obstacle` (its keys) for the
     /// sphere, and its nodes lifted into a paraboloid 1.5 cm below the
     /// plane at its centre.
-    fn pressed_patch(obstacle: &str) -> (crate::scenario::Setup, Vec<f64>) {
+    fn pressed_patch(obstacle: &str) -> (crate::setup::Setup, Vec<f64>) {
         let text = PATCH_IN_SPHERE.replace(SPHERE, obstacle);
         let path = Path::new("patch.toml");
         let setup = Scenario::parse(&text, path)

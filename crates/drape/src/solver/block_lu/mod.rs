@@ -83,7 +83,7 @@ pub enum BlockLuError {
     },
     /// The fill-reducing ordering failed.
     #[error("the minimum degree ordering failed: {0}")]
-    Ordering(super::linear_error::FaerFailure),
+    Ordering(super::faer_failure::FaerFailure),
 }
 
 /// Where block `(I, J)` of the permuted matrix sits in the scalar CSC

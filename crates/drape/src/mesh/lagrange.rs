@@ -6,7 +6,7 @@
 //! code serves every order and the Kronecker property `phi^a(xi_b) =
 //! delta_ab` holds by construction (tested). Node order: see [`crate::mesh`].
 
-use crate::mesh::ElementOrder;
+use super::ElementOrder;
 
 /// Most nodes an element can have (order 3).
 pub const MAX_NODES: usize = 10;
@@ -84,7 +84,7 @@ impl ShapeFunctions {
                 coefficients[a][m] = ct[m][a];
             }
         }
-        let check_points = crate::element::quadrature::QuadratureRule::of_degree(4).points;
+        let check_points = crate::quadrature::QuadratureRule::of_degree(4).points;
         Self {
             order,
             exponents,
