@@ -1,7 +1,7 @@
 """Drape coefficient against bending rigidity: a sweep of the drape tester.
 
-Runs examples/drape-tester.toml (a 30 cm fabric disc settling in folds on
-an 18 cm pedestal) for five bending rigidities, on a coarser mesh than the
+Runs examples/drape-tester.toml (a 30 cm fabric disc gripped on an 18 cm
+pedestal, settling in folds) for five bending rigidities, on a coarser mesh than the
 example's (10 rings instead of 15: 2-7 s a case instead of half a
 minute), measures each final shape and plots the result with matplotlib:
 
@@ -15,12 +15,14 @@ reuses the cases already done. About 15-30 s on 2 cores.
 What to expect: the stiffer the fabric, the less it hangs down round the
 pedestal, so the drape coefficient — the shadow of the draped disc outside
 the pedestal, as a fraction of the flat disc's area outside it (ISO 9073-9)
-— grows with the bending rigidity, from about 0.35 to 0.98 over the range,
-and the rim hangs less far below the pedestal's top (5 cm below the disc).
+— grows with the bending rigidity, from about 0.34 to 0.98 over the range,
+and the rim hangs less far below the pedestal's top (the disc's plane,
+z = 0): from 5.2 to 1.2 cm.
 The shadow is measured here as the area inside the projected rim (the rim
 is the outermost part of a draped disc); `drape measure DIR/cases/NNNN`,
 which takes the exact union of the projected elements, gives the same
-coefficients to three digits (0.346 and 0.952 for B = 2e-5 and 1.6e-4 N m).
+coefficients to a few thousandths (0.348 and 0.936 for B = 2e-5 and 1.6e-4
+N m).
 """
 
 from __future__ import annotations
