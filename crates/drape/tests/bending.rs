@@ -461,3 +461,74 @@ fn curved_meshes_stay_at_rest() {
         assert!(bending.energy(&flattened) > 0.0, "{name}");
     }
 }
+
+/// Issue 31, item 4: where the union jack's larger plate error comes
+/// from. Prints (docs/validation.md, "Simply supported square plate"):
+/// the interior curvature error of each pattern on a sine surface, and
+/// the clamped plate's deflection error. A study, not a check:
+/// `cargo test --release -p drape --test bending union_jack -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn union_jack_study() {
+    let a = 0.2f64;
+    let k = std::f64::consts::PI / a;
+    let amp = 1e-4;
+    let f = |x: f64, y: f64| amp * (k * (x + a / 2.0)).sin() * (k * (y + a / 2.0)).sin();
+    for pattern in [Pattern::Right, Pattern::Alternate] {
+        for n in [8usize, 16, 32, 64] {
+            let mesh = rectangle([a, a], [n, n], pattern, [0.0; 3], ElementOrder::Linear);
+            let b =
+                drape::bending::Bending::new(&mesh, BendingRigidity::Isotropic(1.0), &[]).unwrap();
+            let pos: Vec<[f64; 3]> = mesh
+                .nodes
+                .iter()
+                .map(|p| [p[0], p[1], f(p[0], p[1])])
+                .collect();
+            let inner = a / 2.0 - 1.5 * a / n as f64;
+            let (mut mean, mut weight, mut largest) = (0.0, 0.0, 0.0f64);
+            for p in b.patches() {
+                let mut x = [[0.0; 3]; 6];
+                p.positions(|i| pos[i], &mut x);
+                let kappa = p.curvature(&x[..p.len()]);
+                let c = [0, 1].map(|i| (x[0][i] + x[1][i] + x[2][i]) / 3.0);
+                if c[0].abs() < inner && c[1].abs() < inner {
+                    let e =
+                        (kappa[0] + kappa[1] + 2.0 * k * k * f(c[0], c[1])) / (2.0 * k * k * amp);
+                    mean += e * p.stiffness[0][0];
+                    weight += p.stiffness[0][0];
+                    largest = largest.max(e.abs());
+                }
+            }
+            eprintln!(
+                "{pattern:?} {n} x {n}: interior curvature error, weighted mean {:.2e}, largest {largest:.2e}",
+                mean / weight
+            );
+        }
+    }
+    let (young, t, rho, g): (f64, f64, f64, f64) = (1.0e9, 1.0e-3, 1000.0, 0.0981);
+    let d = young * t.powi(3) / (12.0 * (1.0 - 0.09));
+    let exact = 0.00126 * rho * t * g * a.powi(4) / d;
+    for pattern in [Pattern::Right, Pattern::Alternate] {
+        for n in [8usize, 16, 32] {
+            let mesh = rectangle([a, a], [n, n], pattern, [0.0; 3], ElementOrder::Linear);
+            let centre = mesh.nearest_node([0.0, 0.0, 0.0]).unwrap().0;
+            let count = mesh.node_count();
+            let mut clamped = vec![false; count];
+            for b in mesh.boundary_nodes() {
+                clamped[b] = true;
+            }
+            let fixed = hold(count, mesh.boundary_nodes());
+            let rigidity = BendingRigidity::Plate {
+                rigidity: d,
+                poisson_ratio: 0.3,
+            };
+            let m = clamped_model(mesh, (young, t, rho, g), fixed, clamped, rigidity);
+            let (y, _) = equilibrium(&m, 1);
+            let w = -y[3 * centre + 2];
+            eprintln!(
+                "clamped plate, {pattern:?} {n} x {n}: {:+.2} %",
+                100.0 * (w - exact) / exact
+            );
+        }
+    }
+}
