@@ -102,6 +102,7 @@ pub struct Ghost {
 
 impl Ghost {
     /// The ghost's position when the vertex it mirrors is at `x`.
+    #[inline]
     pub fn position(&self, x: [f64; 3]) -> [f64; 3] {
         let d = sub(x, self.anchor);
         std::array::from_fn(|i| self.anchor[i] + dot(self.reflect[i], d))
@@ -140,6 +141,7 @@ impl Patch {
 
     /// The positions of the patch's nodes into `out` (its first
     /// [`Self::len`] entries), node `a` at `at(a)`, the ghost's mirrored.
+    #[inline]
     pub fn positions(&self, at: impl Fn(usize) -> [f64; 3], out: &mut [[f64; 3]]) {
         for (k, &a) in self.nodes().iter().enumerate() {
             out[k] = at(a);
