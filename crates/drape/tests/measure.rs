@@ -659,9 +659,17 @@ fn a_wider_base_below_the_pedestal_is_not_taken_for_it() {
     assert_eq!(a.drape_coefficient, b.drape_coefficient);
     assert!(a.drape_coefficient > 0.1 && a.drape_coefficient < 0.9);
     let beside = CYLINDER.replace("radius = 0.09", "radius = 0.1");
-    let e = find(&format!("{CYLINDER}\n{beside}"))
-        .unwrap_err()
-        .to_string();
+    let e = find(&format!("{CYLINDER}\n{beside}")).unwrap_err();
+    // Its own error (a front end that finds no pedestal says nothing of a
+    // drape; one that cannot tell the pedestal says why: `drape plot`).
+    assert_eq!(
+        e,
+        MeasureError::AmbiguousPedestal {
+            obstacles: [0, 1],
+            radii: [0.09, 0.1]
+        }
+    );
+    let e = e.to_string();
     assert!(
         e.contains("--pedestal-radius") && e.contains("obstacle[0]") && e.contains("obstacle[1]"),
         "{e}"

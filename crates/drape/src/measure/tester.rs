@@ -108,8 +108,9 @@ impl DrapeTester {
     /// documentation).
     ///
     /// # Errors
-    /// [`MeasureError::NoPedestal`] and [`MeasureError::NotADisc`] saying
-    /// why a radius that was not given cannot be found; those of
+    /// [`MeasureError::NoPedestal`], [`MeasureError::AmbiguousPedestal`]
+    /// and [`MeasureError::NotADisc`] saying why a radius that was not
+    /// given cannot be found; those of
     /// [`DrapeTester::new`].
     pub fn find(
         scenario: Option<&Scenario>,
@@ -131,16 +132,14 @@ impl DrapeTester {
             .fold(0.0, f64::max);
         let pedestal = match scenario {
             Some(s) => find_pedestal(s, &up, rim_center, reach, time),
-            None => Err("no scenario to find it in".to_owned()),
+            None => Err(MeasureError::NoPedestal {
+                reason: "no scenario to find it in".to_owned(),
+            }),
         };
         let (pedestal_radius, pedestal_source) = match (given.pedestal_radius, &pedestal) {
             (Some(r), _) => (r, "given".to_owned()),
             (None, Ok(p)) => (p.radius, format!("obstacle[{}]", p.index)),
-            (None, Err(reason)) => {
-                return Err(MeasureError::NoPedestal {
-                    reason: reason.clone(),
-                });
-            }
+            (None, Err(e)) => return Err(e.clone()),
         };
         let axis = pedestal.as_ref().ok().map(|p| p.axis_point);
         let (specimen_radius, specimen_source, disc_center) = match given.specimen_radius {
@@ -197,14 +196,15 @@ struct Pedestal {
 
 /// The vertical cylinder under the specimen (its axis within `reach` of
 /// `rim_center`) whose top is highest (the nearest axis of equal tops and
-/// radii); or why there is none, or why the choice is ambiguous.
+/// radii); or why there is none ([`MeasureError::NoPedestal`]), or why
+/// the choice is ambiguous ([`MeasureError::AmbiguousPedestal`]).
 fn find_pedestal(
     scenario: &Scenario,
     up: &Horizontal,
     rim_center: [f64; 3],
     reach: f64,
     time: f64,
-) -> Result<Pedestal, String> {
+) -> Result<Pedestal, MeasureError> {
     let cos_tolerance = VERTICAL_TOLERANCE_DEGREES.to_radians().cos();
     let mut cylinders = 0;
     let mut vertical = 0;
@@ -239,10 +239,10 @@ fn find_pedestal(
             Some((t, d, p)) => {
                 if (top - t).abs() <= TOP_TIE * reach.max(f64::MIN_POSITIVE) {
                     if pedestal.radius != p.radius {
-                        return Err(format!(
-                            "obstacle[{}] and obstacle[{index}] are both vertical cylinders under the specimen with their tops at one height and radii {} m and {} m: give the pedestal's radius (--pedestal-radius)",
-                            p.index, p.radius, pedestal.radius
-                        ));
+                        return Err(MeasureError::AmbiguousPedestal {
+                            obstacles: [p.index, index],
+                            radii: [p.radius, pedestal.radius],
+                        });
                     }
                     if distance < d {
                         Some((top, distance, pedestal))
@@ -258,20 +258,19 @@ fn find_pedestal(
         };
     }
     let k = up.vertical();
-    match best {
-        Some((_, _, p)) => Ok(p),
-        None if cylinders == 0 => {
-            Err("the scenario has no [[obstacle]] of shape \"cylinder\"".into())
-        }
-        None if vertical == 0 => Err(format!(
+    let reason = match best {
+        Some((_, _, p)) => return Ok(p),
+        None if cylinders == 0 => "the scenario has no [[obstacle]] of shape \"cylinder\"".into(),
+        None if vertical == 0 => format!(
             "no cylinder obstacle has its axis along the vertical [{}, {}, {}] (within {VERTICAL_TOLERANCE_DEGREES} degree)",
             k[0], k[1], k[2]
-        )),
-        None => Err(format!(
+        ),
+        None => format!(
             "no vertical cylinder obstacle stands under the specimen (its axis within {reach} m of the initial rim's centre [{}, {}, {}])",
             rim_center[0], rim_center[1], rim_center[2]
-        )),
-    }
+        ),
+    };
+    Err(MeasureError::NoPedestal { reason })
 }
 
 /// The specimen's radius from the scenario's mesh, its source and the
