@@ -5,6 +5,7 @@
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
+use drape::human::human;
 use drape::output::directory::{self, DirectoryError};
 use drape::scenario::{Scenario, ScenarioError};
 use drape::setup::Setup;
@@ -214,16 +215,6 @@ fn main() -> ExitCode {
             eprintln!("{name}: {e:#}");
             ExitCode::from(signals::exit_code(signal))
         }
-    }
-}
-
-/// A number as a person writes it: plain between 1e-4 and 1e6, in
-/// e-notation outside (Rust's `{}` writes 1e308 with 309 digits).
-fn human(x: f64) -> String {
-    if x != 0.0 && x.is_finite() && !(1e-4..1e6).contains(&x.abs()) {
-        format!("{x:e}")
-    } else {
-        format!("{x}")
     }
 }
 

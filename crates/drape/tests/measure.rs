@@ -577,6 +577,17 @@ fn tester_not_found_says_why() {
     let file = "[mesh]\nshape = \"file\"\npath = \"square.msh\"";
     let e = find(&scenario(file, CYLINDER, WEIGHT), &square, Given::default()).unwrap_err();
     assert!(reason(e).contains("rim is not a circle"));
+    // Its numbers as a person writes them: the centroid of a rim a hair
+    // off the origin was written with 35 decimals (issue 35).
+    let mut off = square.clone();
+    for x in &mut off.nodes {
+        x[0] += 1e-34;
+    }
+    let e = reason(find(&scenario(file, CYLINDER, WEIGHT), &off, Given::default()).unwrap_err());
+    assert!(
+        e.contains("from their centroid [") && e.contains("e-") && !e.contains("0000000000"),
+        "{e}"
+    );
     // Radii that cannot be.
     let e = find(
         &scenario(DISC, CYLINDER, WEIGHT),

@@ -23,6 +23,7 @@
 //! nor was given is an error that says why.
 
 use super::{Horizontal, MeasureError};
+use crate::human::{human, human_point};
 use crate::mesh::Mesh;
 use crate::scenario::{LoadKindSpec, MeshShape, ObstacleSpec, Scenario};
 use crate::vec3;
@@ -262,12 +263,13 @@ fn find_pedestal(
         Some((_, _, p)) => return Ok(p),
         None if cylinders == 0 => "the scenario has no [[obstacle]] of shape \"cylinder\"".into(),
         None if vertical == 0 => format!(
-            "no cylinder obstacle has its axis along the vertical [{}, {}, {}] (within {VERTICAL_TOLERANCE_DEGREES} degree)",
-            k[0], k[1], k[2]
+            "no cylinder obstacle has its axis along the vertical {} (within {VERTICAL_TOLERANCE_DEGREES} degree)",
+            human_point(k)
         ),
         None => format!(
-            "no vertical cylinder obstacle stands under the specimen (its axis within {reach} m of the initial rim's centre [{}, {}, {}])",
-            rim_center[0], rim_center[1], rim_center[2]
+            "no vertical cylinder obstacle stands under the specimen (its axis within {} m of the initial rim's centre {})",
+            human(reach),
+            human_point(rim_center)
         ),
     };
     Err(MeasureError::NoPedestal { reason })
@@ -294,8 +296,8 @@ fn specimen_of(
             let k = up.vertical();
             if k[2].abs() < cos_tolerance {
                 return Err(not_a_disc(format!(
-                    "the [mesh] disc lies in a plane z = constant, which is not horizontal for the vertical [{}, {}, {}]",
-                    k[0], k[1], k[2]
+                    "the [mesh] disc lies in a plane z = constant, which is not horizontal for the vertical {}",
+                    human_point(k)
                 )));
             }
             let disc_center = scenario.mesh.center.unwrap_or([0.0; 3]);
@@ -313,8 +315,10 @@ fn specimen_of(
             let smallest = radii.iter().copied().fold(f64::INFINITY, f64::min);
             if largest.is_nan() || largest <= 0.0 || largest - smallest > RIM_TOLERANCE * largest {
                 return Err(not_a_disc(format!(
-                    "the initial mesh's rim is not a circle: its nodes lie {smallest} m to {largest} m from their centroid [{}, {}, {}]",
-                    center[0], center[1], center[2]
+                    "the initial mesh's rim is not a circle: its nodes lie {} m to {} m from their centroid {}",
+                    human(smallest),
+                    human(largest),
+                    human_point(center)
                 )));
             }
             Ok((largest, "initial rim".into(), None))
