@@ -356,7 +356,7 @@ fn run(
     match result {
         Ok(summary) => {
             if !quiet {
-                print_completed(&summary, start, &out);
+                print_completed(&summary, start, out);
             }
             Ok(())
         }

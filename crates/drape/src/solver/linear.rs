@@ -1311,7 +1311,7 @@ pub(super) mod tests {
         let (cp, ri, v) = (vec![0, 2, 4, 4], vec![0, 1, 0, 1], vec![2.0, 1.0, 1.0, 2.0]);
         let e = LinearSolver::new(&cp, &ri)
             .unwrap()
-            .solve(&v, false, &mut vec![1.0; 3])
+            .solve(&v, false, &mut [1.0; 3])
             .unwrap_err();
         assert_eq!(e.matrix, Matrix::Hessian);
         assert!(
