@@ -11,7 +11,7 @@ that reach each other. A module's own file (`mod.rs`) is their parent,
 not one of them: a child using its parent's items, or the parent
 declaring and re-exporting its children, is no circle. A name the parent
 only re-exports (`pub use child::Name`) counts as the child's. Tests
-(`#[cfg(test)] mod ... { }`) are left out: they may use anything.
+(`#[cfg(test)]`, `#[cfg(all(test, ...))]` items) are left out: they may use anything.
 
 Prints each circle with the references that make it, and exits 1 if there
 is any, 0 if there is none.
@@ -68,7 +68,7 @@ def strip_comments_and_strings(text):
 def strip_tests(code):
     """The code without `#[cfg(test)]` items (a module's braces, or one item)."""
     while True:
-        m = re.search(r"#\[cfg\(test\)\]", code)
+        m = re.search(r"#\[cfg\((?:all\()?test\b[^\]]*\]", code)
         if not m:
             return code
         j = m.end()

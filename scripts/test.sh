@@ -13,6 +13,9 @@
 # 2. the Python package: `pip install ./crates/drape-py` into a virtual
 #    environment, then its tests, `pytest crates/drape-py/tests`.
 #
+# First of all, `scripts/import-cycles.py`: the library's modules import
+# one another one way, without circles (docs/testing.md).
+#
 # Needs cargo and python3 (3.9 or later, with venv and pip). The virtual
 # environment is made once, as drape-py-venv in the target directory
 # ($CARGO_TARGET_DIR or target/), and the package is rebuilt into it on
@@ -27,6 +30,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 start=$SECONDS
+echo "== Import circles: python3 scripts/import-cycles.py"
+python3 scripts/import-cycles.py
 echo "== Rust: cargo test --release --workspace --exclude drape-bench"
 cargo test --release --workspace --exclude drape-bench
 echo "== Rust tests done in $((SECONDS - start)) s"

@@ -5,10 +5,11 @@
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
-use drape::output::directory;
+use drape::human::human;
+use drape::output::directory::{self, DirectoryError};
 use drape::scenario::{Scenario, ScenarioError};
 use drape::setup::Setup;
-use drape::simulation::{self, RunControl, RunError, StepInfo};
+use drape::simulation::{self, Front, RunError, Session, StepInfo};
 use drape_render::{Field, View};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -217,23 +218,14 @@ fn main() -> ExitCode {
     }
 }
 
-/// A number as a person writes it: plain between 1e-4 and 1e6, in
-/// e-notation outside (Rust's `{}` writes 1e308 with 309 digits).
-fn human(x: f64) -> String {
-    if x != 0.0 && x.is_finite() && !(1e-4..1e6).contains(&x.abs()) {
-        format!("{x:e}")
-    } else {
-        format!("{x}")
-    }
-}
-
-fn load(path: &Path) -> Result<Setup, Failure> {
+/// The scenario at `path` built, with its text.
+fn load(path: &Path) -> Result<(Setup, String), Failure> {
     let (scenario, source) = Scenario::read(path)?;
-    Ok(scenario.build(path, &source)?)
+    Ok((scenario.build(path, &source)?, source))
 }
 
 fn check(path: &Path) -> Result<(), Failure> {
-    let setup = load(path)?;
+    let (setup, _) = load(path)?;
     let m = &setup.model;
     println!("{}: ok", path.display());
     println!("  title     {}", setup.title);
@@ -313,15 +305,16 @@ fn run(
     // Ctrl-C or SIGTERM while the scenario is read and built (a large
     // mesh takes seconds) ends the process at once, saying so.
     signals::install();
+    let directory_error = |e: DirectoryError| Failure::Input(e.into());
     // A resume holds its directory before it reads anything, so that a
     // refusal can be recorded in the summary without racing another writer.
     let resumed = match &resume {
-        Some(dir) => Some(directory::lock_resume(dir).map_err(|e| Failure::Input(e.into()))?),
+        Some(dir) => Some(Session::resume(dir, Front::CommandLine).map_err(directory_error)?),
         None => None,
     };
-    let (path, setup) = match (&scenario, &resume) {
+    let (path, (setup, text)) = match (&scenario, &resumed) {
         (Some(p), None) => (p.clone(), load(p)?),
-        (_, Some(dir)) => load_to_resume(scenario.clone(), dir)?,
+        (_, Some(session)) => load_to_resume(scenario.clone(), session)?,
         (None, None) => unreachable!("clap requires one of them"),
     };
     // From here on (the directory is about to be written) a signal no
@@ -329,47 +322,47 @@ fn run(
     // current step (checkpoint, summary).
     signals::setup_done();
     let path = path.as_path();
-    let out = resume.clone().or(out).unwrap_or_else(|| {
-        let stem = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "run".into());
-        PathBuf::from("out").join(stem)
-    });
     // One writer per directory, held to the end of the run; a fresh run
     // starts from a directory of drape's own with its old outputs gone.
-    let lock = match resumed {
-        Some(lock) => lock,
-        None => directory::lock(&out).map_err(|e| Failure::Input(e.into()))?,
+    let session = match resumed {
+        Some(session) => session,
+        None => {
+            let out = out.unwrap_or_else(|| {
+                let stem = path
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_else(|| "run".into());
+                PathBuf::from("out").join(stem)
+            });
+            let session = Session::fresh(&out, Front::CommandLine).map_err(directory_error)?;
+            session.start_fresh(Some(path)).map_err(directory_error)?;
+            session
+                .keep_scenario(Some(path), &text, &setup)
+                .map_err(|message| Failure::Run(anyhow::anyhow!(message)))?;
+            session
+        }
     };
-    if resume.is_none() {
-        directory::clear_previous_outputs(&lock, &out, Some(path))
-            .map_err(|e| Failure::Input(e.into()))?;
-        remember_scenario(path, &out, &setup)?;
-    }
+    let out = session.dir();
     let start = Instant::now();
     let mut progress = Progress::new(quiet, verbose, setup.adaptive.is_some());
     for warning in simulation::warnings(&setup) {
         eprintln!("warning: {warning}");
     }
-    let control = RunControl {
-        stop: Some(&signals::STOP),
-        resume: resume.is_some(),
-    };
-    let result = simulation::run_with(&setup, &out, &mut |info| progress.step(info), control);
+    let control = session.control(Some(&signals::STOP));
+    let result = simulation::run_with(&setup, out, &mut |info| progress.step(info), control);
     if let Some(bar) = &progress.bar {
         bar.finish_and_clear();
     }
     match result {
         Ok(summary) => {
             if !quiet {
-                print_completed(&summary, start, &out);
+                print_completed(&summary, start, out);
             }
             Ok(())
         }
         Err(e) => Err(match e.cause() {
             RunError::Interrupted { .. } => Failure::Interrupted(anyhow::Error::new(e)),
-            RunError::Resume(_) => Failure::Input(anyhow::Error::new(e)),
+            RunError::Resume { .. } => Failure::Input(anyhow::Error::new(e)),
             RunError::Io { .. } => Failure::Run(anyhow::Error::new(e)),
             _ => Failure::Run(
                 anyhow::Error::new(e).context(format!("run of {} failed", path.display())),
@@ -378,55 +371,33 @@ fn run(
     }
 }
 
-/// The scenario a resume of `dir` goes on with (`scenario`, or the one
-/// the run started with) and its setup; a refusal is recorded in the
-/// directory's summary.
-fn load_to_resume(scenario: Option<PathBuf>, dir: &Path) -> Result<(PathBuf, Setup), Failure> {
-    let loaded = scenario
-        .map_or_else(|| started_with(dir), Ok)
-        .and_then(|p| {
-            // A changed or missing input file is named as such, before
-            // the scenario reads it.
-            simulation::check_resume_inputs(dir).map_err(|e| Failure::Input(e.into()))?;
-            let setup = load(&p)?;
-            Ok((p, setup))
-        });
-    loaded.map_err(|failure| record_refusal(dir, failure))
-}
-
-/// Copies the scenario at `path` into `out` (for --resume and for readers
-/// of the outputs) with its absolute path; a failure is recorded in the
-/// directory's summary.
-fn remember_scenario(path: &Path, out: &Path, setup: &Setup) -> Result<(), Failure> {
-    let copy = out.join("scenario.toml");
-    std::fs::create_dir_all(out)
-        .and_then(|()| {
-            // Never copy a file onto itself (that would truncate it).
-            let same = std::fs::canonicalize(path).ok() == std::fs::canonicalize(&copy).ok();
-            if same {
-                Ok(())
-            } else {
-                std::fs::copy(path, &copy).map(|_| ())
-            }
-        })
-        .and_then(|()| {
-            let abs = std::fs::canonicalize(path)?;
-            // The path's own bytes: a name that is not UTF-8 must be
-            // found again by --resume.
-            std::fs::write(out.join("scenario.path"), path_bytes(&abs))
-        })
-        .with_context(|| format!("cannot write into {}", out.display()))
-        .map_err(|e| {
-            // The directory is drape's: its summary says why.
-            let message = format!("{e:#}");
-            match simulation::record_failure(out, Some(setup), false, &message) {
-                Ok(()) => Failure::Run(e),
-                Err(s) => Failure::Run(e.context(format!(
-                    "and {} could not be written: {s}",
-                    out.join("summary.json").display()
-                ))),
-            }
-        })
+/// The scenario a resume of the session's directory goes on with
+/// (`scenario`, or the one the run started with), its setup and its text;
+/// a refusal is recorded in the directory's summary.
+fn load_to_resume(
+    scenario: Option<PathBuf>,
+    session: &Session,
+) -> Result<(PathBuf, (Setup, String)), Failure> {
+    let path = match scenario {
+        Some(p) => p,
+        None => session.started_with().map_err(|e| {
+            record_refusal(
+                session,
+                Failure::Input(anyhow::anyhow!(
+                    "{}: {e}; is {} the output directory of a drape run? (or name the scenario: drape run SCENARIO --resume DIR)",
+                    session.dir().join(directory::SCENARIO_PATH).display(),
+                    session.dir().display()
+                )),
+            )
+        })?,
+    };
+    // A changed or missing input file is named as such, before the
+    // scenario reads it (its refusal recorded).
+    session
+        .check_inputs()
+        .map_err(|message| Failure::Input(anyhow::anyhow!(message)))?;
+    let loaded = load(&path).map_err(|failure| record_refusal(session, failure))?;
+    Ok((path, loaded))
 }
 
 /// What a run shows of its progress: a bar on a terminal (with each
@@ -554,61 +525,12 @@ fn print_completed(summary: &simulation::Summary, start: Instant, out: &Path) {
 /// A resume refused after its directory was locked: the refusal goes into
 /// the directory's summary (status "failed", its counts kept; a completed
 /// run's summary is left alone), and is returned.
-fn record_refusal(dir: &Path, failure: Failure) -> Failure {
+fn record_refusal(session: &Session, failure: Failure) -> Failure {
     let (Failure::Input(e) | Failure::Run(e) | Failure::Interrupted(e)) = &failure;
-    // A refusal of the inputs says "cannot resume" itself: once is enough.
-    let recorded = match e.downcast_ref::<RunError>() {
-        Some(RunError::Resume(why)) => simulation::record_refused_resume(dir, why),
-        _ => simulation::record_refused_resume(dir, &format!("{e:#}")),
-    };
-    match recorded {
+    match session.refuse(&format!("{e:#}")) {
         Ok(_) => failure,
-        Err(s) => Failure::Input(anyhow::anyhow!(
-            "{e:#}; and {} could not be written: {s}",
-            dir.join("summary.json").display()
-        )),
+        Err(unrecorded) => Failure::Input(anyhow::anyhow!(unrecorded)),
     }
-}
-
-/// The bytes of `path` as the operating system has them.
-#[cfg(unix)]
-fn path_bytes(path: &Path) -> Vec<u8> {
-    use std::os::unix::ffi::OsStrExt;
-    path.as_os_str().as_bytes().to_vec()
-}
-
-#[cfg(not(unix))]
-fn path_bytes(path: &Path) -> Vec<u8> {
-    path.to_string_lossy().into_owned().into_bytes()
-}
-
-/// The path whose bytes [`path_bytes`] gave.
-#[cfg(unix)]
-fn path_from_bytes(bytes: &[u8]) -> PathBuf {
-    use std::os::unix::ffi::OsStrExt;
-    PathBuf::from(std::ffi::OsStr::from_bytes(bytes))
-}
-
-#[cfg(not(unix))]
-fn path_from_bytes(bytes: &[u8]) -> PathBuf {
-    PathBuf::from(String::from_utf8_lossy(bytes).into_owned())
-}
-
-/// The scenario a run in `dir` was started with (`dir/scenario.path`,
-/// the path's bytes; a line end after them, as older runs wrote or an
-/// editor adds, is dropped).
-fn started_with(dir: &Path) -> Result<PathBuf, Failure> {
-    let file = dir.join("scenario.path");
-    let bytes = std::fs::read(&file).map_err(|e| {
-        Failure::Input(anyhow::anyhow!(
-            "{}: {e}; is {} the output directory of a drape run? (or name the scenario: drape run SCENARIO --resume DIR)",
-            file.display(),
-            dir.display()
-        ))
-    })?;
-    let bytes = bytes.strip_suffix(b"\n").unwrap_or(&bytes);
-    let bytes = bytes.strip_suffix(b"\r").unwrap_or(bytes);
-    Ok(path_from_bytes(bytes))
 }
 
 // `drape render`'s arguments (the subcommand's and the function's).

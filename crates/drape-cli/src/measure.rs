@@ -104,7 +104,9 @@ impl Run {
         let tester = DrapeTester::find(self.scenario.as_ref(), &mesh, entry.time, self.given)
             .map_err(|e| match e {
                 // What the scenario lacks is said of the scenario.
-                MeasureError::NoPedestal { .. } | MeasureError::NotADisc { .. } => {
+                MeasureError::NoPedestal { .. }
+                | MeasureError::AmbiguousPedestal { .. }
+                | MeasureError::NotADisc { .. } => {
                     let found = if self.scenario.is_some() {
                         ""
                     } else {
@@ -269,11 +271,23 @@ pub fn top_view_overlay(dir: &Path, select: FrameSelect) -> Option<(Vec<Circle>,
 
 /// The drape coefficient and the folds of every frame of a drape-tester
 /// run `dir`, as two plot panels; `None` for a run that is not a drape
-/// tester. A frame that cannot be measured is left out, with a note.
+/// tester (no pedestal or no disc specimen in its scenario) or whose
+/// outputs cannot be read (the plot says what is wrong with them). A
+/// drape tester whose first frame cannot be measured has no panels, and
+/// a note says why; a later frame that cannot be measured is left out,
+/// with a note.
 pub fn drape_panels(dir: &Path) -> Option<Vec<ExtraPanel>> {
     let run = Run::open(dir, Given::default()).ok()?;
-    // Not a drape tester: its first frame says so.
-    run.measure(0).ok()?;
+    if let Err(e) = run.measure(0) {
+        let not_a_tester = matches!(
+            e.downcast_ref::<MeasureError>(),
+            Some(MeasureError::NoPedestal { .. } | MeasureError::NotADisc { .. })
+        );
+        if !not_a_tester {
+            eprintln!("note: no drape coefficient or folds panels: {e:#}");
+        }
+        return None;
+    }
     let (mut time, mut dc, mut folds) = (Vec::new(), Vec::new(), Vec::new());
     for i in 0..run.out.frames.len() {
         match run.measure(i) {

@@ -185,8 +185,32 @@ fn drape_tester_frames_are_measured() {
     // panels, a taller figure.
     let o = drape(&["plot", out_s]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("note:"));
     let png = drape_render::RgbImage::read_png(&out.join("plot.png")).unwrap();
     assert_eq!((png.width, png.height), (1200, 1200));
+    // A drape tester whose pedestal cannot be told (a second cylinder, its
+    // top at the same height): the panels are left out, and a note says
+    // why (issue 35: they were dropped without a word).
+    let kept = std::fs::read_to_string(out.join("scenario.toml")).unwrap();
+    std::fs::write(
+        out.join("scenario.toml"),
+        format!(
+            "{kept}\n[[obstacle]]\nshape = \"cylinder\"\ncenter = [0.0, 0.0, 2.0e-6]\naxis = [0.0, 0.0, 1.0]\nradius = 0.12\nheight = 0.1\n"
+        ),
+    )
+    .unwrap();
+    let o = drape(&["plot", out_s]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("note: no drape coefficient or folds panels")
+            && e.contains("tops at one height")
+            && e.contains("--pedestal-radius"),
+        "{e}"
+    );
+    let png = drape_render::RgbImage::read_png(&out.join("plot.png")).unwrap();
+    assert_eq!((png.width, png.height), (1200, 900));
+    std::fs::write(out.join("scenario.toml"), kept).unwrap();
     // `drape render --view top` draws the pedestal (solid, [20, 20, 20])
     // and the specimen's circle (dashed, [90, 90, 90]) over the fabric: the
     // pixels of those colours in the picture (below the title, left of the
@@ -271,9 +295,10 @@ fn a_scenario_that_is_not_a_disc_on_a_cylinder_needs_the_radii() {
     let out = run(&dir, &three_steps(&example("fabric-on-pedestal")));
     let out_s = out.to_str().unwrap();
     let scenario = out.join("scenario.toml");
-    // Not a drape tester: the plot is the history's alone.
+    // Not a drape tester: the plot is the history's alone, without a word.
     let o = drape(&["plot", out_s]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("note:"));
     let png = drape_render::RgbImage::read_png(&out.join("plot.png")).unwrap();
     assert_eq!((png.width, png.height), (1200, 900));
     let e = refused(&[out_s]);

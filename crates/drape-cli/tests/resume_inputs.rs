@@ -116,7 +116,7 @@ fn a_changed_or_missing_mesh_file_refuses_the_resume() {
     for f in [
         named.as_str(),
         "(mesh.path) has changed since the checkpoint was written",
-        "Restore the file as it was, or start a fresh run",
+        "Restore the file as it was, or start a fresh run (without --resume)",
     ] {
         assert!(stderr(&o).contains(f), "expected {f:?} in\n{}", stderr(&o));
     }
@@ -128,8 +128,10 @@ fn a_changed_or_missing_mesh_file_refuses_the_resume() {
         message.starts_with("cannot resume: ") && message.contains(&named),
         "{message}"
     );
-    // Said once (the summary said "cannot resume: cannot resume: ...").
+    // Said once (the summary said "cannot resume: cannot resume: ..."),
+    // with the command line's way to a fresh run.
     assert_eq!(message.matches("cannot resume").count(), 1, "{message}");
+    assert!(message.ends_with("(without --resume)"), "{message}");
 
     std::fs::remove_file(&mesh).unwrap();
     let o = drape(&[Path::new("--resume"), &out]);
@@ -137,7 +139,7 @@ fn a_changed_or_missing_mesh_file_refuses_the_resume() {
     for f in [
         named.as_str(),
         "(mesh.path) recorded in the checkpoint cannot be read",
-        "restore it as it was, or start a fresh run",
+        "restore it as it was, or start a fresh run (without --resume)",
     ] {
         assert!(stderr(&o).contains(f), "expected {f:?} in\n{}", stderr(&o));
     }

@@ -1,9 +1,11 @@
 //! `drape.run` and `drape.check`: what `drape run` and `drape check` do,
 //! called from Python.
 //!
-//! The run holds the output directory as the command line does (its lock,
-//! a fresh run's clean slate, `scenario.toml` and `scenario.path` for
-//! `--resume` and for readers) and runs with the GIL released. Ctrl-C
+//! The run holds the output directory as the command line does, through
+//! the library's [`Session`] (its lock, a fresh run's clean slate,
+//! `scenario.toml` and `scenario.path` for a resume and for readers, a
+//! refused resume recorded in its words: `resume=False`), and runs with
+//! the GIL released. Ctrl-C
 //! reaches a Rust loop only through Python: the interpreter's own handler
 //! records the signal, and the run's observer asks for it
 //! (`PyErr_CheckSignals`, every [`SIGNAL_INTERVAL`] at most, between
@@ -13,10 +15,10 @@
 //! `KeyboardInterrupt` is raised.
 
 use crate::errors::{output_error, run_error, scenario_error};
-use crate::input::{Loaded, Source};
+use crate::input::Source;
 use crate::result::{RunResult, json_to_py};
-use drape::output::{atomic::write_atomic, directory};
-use drape::simulation::{self, RunControl, RunError, StepInfo};
+use drape::output::directory::DirectoryError;
+use drape::simulation::{self, Front, RunError, Session, StepInfo};
 use pyo3::exceptions::{PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -77,25 +79,23 @@ pub fn run(
         }
     };
     let from_dict = matches!(source, Source::Dict(_));
-    let (lock, loaded) = if resume {
+    let directory_error = |e: DirectoryError| output_error(py, e.to_string(), &out);
+    let (session, loaded) = if resume {
         // As the command line: the directory (which must hold a run) is
         // held before anything is read, and a refusal from then on is
         // recorded in its summary.
-        let lock =
-            directory::lock_resume(&out).map_err(|e| output_error(py, e.to_string(), &out))?;
+        let session = Session::resume(&out, Front::Python).map_err(directory_error)?;
         // A changed or missing input file is named as such, before the
         // scenario reads it.
-        if let Err(e) = simulation::check_resume_inputs(&out) {
-            let RunError::Resume(why) = &e else {
-                return Err(run_error(py, e.to_string(), &out));
-            };
-            let message = refused(&out, why);
-            return Err(run_error(py, message, &out));
-        }
+        session
+            .check_inputs()
+            .map_err(|message| run_error(py, message, &out))?;
         match py.detach(|| source.load()) {
-            Ok(loaded) => (lock, loaded),
+            Ok(loaded) => (session, loaded),
             Err(e) => {
-                refused(&out, &e);
+                // The scenario's own error is raised; the summary says it
+                // too (or could not).
+                let _ = session.refuse(&e);
                 return Err(scenario_error(py, &e, from_dict));
             }
         }
@@ -103,24 +103,17 @@ pub fn run(
         let loaded = py
             .detach(|| source.load())
             .map_err(|e| scenario_error(py, &e, from_dict))?;
-        let lock = directory::lock(&out).map_err(|e| output_error(py, e.to_string(), &out))?;
-        (lock, loaded)
-    };
-    if !resume {
-        let scenario_file = match &source {
-            Source::File(path) => Some(path.as_path()),
-            Source::Dict(_) => None,
+        let session = Session::fresh(&out, Front::Python).map_err(directory_error)?;
+        let (file, text) = match &source {
+            Source::File(path) => (Some(path.as_path()), loaded.text.as_str()),
+            Source::Dict(text) => (None, text.as_str()),
         };
-        directory::clear_previous_outputs(&lock, &out, scenario_file)
-            .map_err(|e| output_error(py, e.to_string(), &out))?;
-        keep_scenario(&source, &loaded, &out).map_err(|e| {
-            output_error(
-                py,
-                format!("cannot write into {}: {e}", out.display()),
-                &out,
-            )
-        })?;
-    }
+        session.start_fresh(file).map_err(directory_error)?;
+        session
+            .keep_scenario(file, text, &loaded.setup)
+            .map_err(|message| output_error(py, message, &out))?;
+        (session, loaded)
+    };
 
     let stop = AtomicBool::new(false);
     let mut signal: Option<PyErr> = None;
@@ -136,13 +129,14 @@ pub fn run(
                 stop.store(true, Ordering::SeqCst);
             }
         };
-        let control = RunControl {
-            stop: Some(&stop),
-            resume,
-        };
-        simulation::run_with(&loaded.setup, &out, &mut observer, control)
+        simulation::run_with(
+            &loaded.setup,
+            &out,
+            &mut observer,
+            session.control(Some(&stop)),
+        )
     });
-    drop(lock);
+    drop(session);
     match result {
         Ok(summary) => {
             let value = serde_json::to_value(&summary)
@@ -164,18 +158,6 @@ pub fn run(
         }
         Err(e) => Err(run_error(py, e.to_string(), &out)),
     }
-}
-
-/// Records a resume refused for `why` in `out/summary.json`, as the
-/// command line does ([`simulation::record_refused_resume`]), and returns
-/// the message (which says so if the summary could not be written).
-fn refused(out: &Path, why: &dyn std::fmt::Display) -> String {
-    simulation::record_refused_resume(out, why).unwrap_or_else(|e| {
-        format!(
-            "cannot resume: {why}; and {} could not be written: {e}",
-            out.join("summary.json").display()
-        )
-    })
 }
 
 /// Validates a scenario and builds its model without running it, as
@@ -241,29 +223,4 @@ fn default_out(path: &Path) -> PathBuf {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "run".into());
     PathBuf::from("out").join(stem)
-}
-
-/// `OUT/scenario.toml` (the file's copy, or a dict's text) and
-/// `OUT/scenario.path` (where it lies), for `--resume` and for readers of
-/// the outputs.
-fn keep_scenario(source: &Source, loaded: &Loaded, out: &Path) -> std::io::Result<()> {
-    let copy = out.join("scenario.toml");
-    let original = match source {
-        Source::File(path) => {
-            // Never write a file onto itself (a sweep's case runs its
-            // scenario where its outputs go).
-            if std::fs::canonicalize(path).ok() != std::fs::canonicalize(&copy).ok() {
-                write_atomic(&copy, loaded.text.as_bytes())?;
-            }
-            std::fs::canonicalize(path)?
-        }
-        Source::Dict(text) => {
-            write_atomic(&copy, text.as_bytes())?;
-            std::fs::canonicalize(&copy)?
-        }
-    };
-    write_atomic(
-        &out.join("scenario.path"),
-        original.to_string_lossy().as_bytes(),
-    )
 }

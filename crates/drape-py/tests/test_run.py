@@ -64,6 +64,21 @@ def test_a_dict_runs_as_its_file_does(cli, tmp_path):
     assert drape.check(kept)["nodes"] == 121
 
 
+@pytest.mark.skipif(sys.platform == "win32", reason="file names are not bytes on Windows")
+def test_a_scenario_path_that_is_not_utf8_is_kept_in_its_own_bytes(tmp_path):
+    """scenario.path holds the path's bytes, as the command line writes them
+    (Python wrote it lossily: a resume would look for another file)."""
+    import os
+
+    folder = os.fsencode(tmp_path) + b"/caf\xe9"
+    os.mkdir(folder)
+    scenario = Path(os.fsdecode(folder + b"/short.toml"))
+    write_scenario(short_pedestal(), tmp_path / "short.toml").rename(scenario)
+    out = tmp_path / "out"
+    drape.run(scenario, out=out)
+    assert (out / "scenario.path").read_bytes() == os.fsencode(scenario.resolve())
+
+
 def test_the_result_reads_the_outputs(tmp_path):
     info = drape.check(short_pedestal())
     res = drape.run(short_pedestal(), out=tmp_path / "run")

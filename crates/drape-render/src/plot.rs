@@ -192,7 +192,10 @@ pub fn plot_image_with(
     let (title, note) = title_and_note(dir);
     register_fonts();
     let monitors = hist.monitors();
-    let mut panels = history_panels(&hist, &monitors);
+    let tension_field = std::fs::read_to_string(dir.join("scenario.toml"))
+        .ok()
+        .and_then(|text| crate::scenario::has_tension_field(&text));
+    let mut panels = history_panels(&hist, &monitors, tension_field);
     panels.extend(extra.iter().map(extra_panel));
     let titles: Vec<String> = panels.iter().map(|p| p.title.clone()).collect();
     let (bw, bh) = (width * SS, height * SS);
@@ -263,15 +266,16 @@ fn title_and_note(dir: &Path) -> (String, Option<String>) {
 
 /// The panels of a history, in order: the monitors' heights, the
 /// energies, Newton's iterations, the contact force, the wrinkling state
-/// and the smallest gap.
-fn history_panels(hist: &History, monitors: &[String]) -> Vec<Panel> {
+/// (labelled for a material with or without a tension field, when the
+/// scenario says which) and the smallest gap.
+fn history_panels(hist: &History, monitors: &[String], tension_field: Option<bool>) -> Vec<Panel> {
     let has_obstacles = column(hist, "min_gap").is_some_and(|v| v.iter().any(|x| x.is_finite()));
     vec![
         monitor_panel(hist, monitors),
         energy_panel(hist),
         iteration_panel(hist),
         contact_force_panel(hist, has_obstacles),
-        wrinkling_panel(hist),
+        wrinkling_panel(hist, tension_field),
         gap_panel(hist, has_obstacles),
     ]
 }
@@ -358,15 +362,32 @@ fn contact_force_panel(hist: &History, has_obstacles: bool) -> Panel {
     cf
 }
 
-fn wrinkling_panel(hist: &History) -> Panel {
-    let mut ws = Panel::new("Wrinkling state (fraction of elements)", "fraction");
-    for (k, (c, label)) in [
-        ("taut_fraction", "taut"),
-        ("wrinkled_fraction", "wrinkled"),
-        ("slack_fraction", "slack"),
-    ]
-    .iter()
-    .enumerate()
+/// The fractions of taut, wrinkled and slack elements. Without a
+/// tension-field model the fabric carries compression and nothing
+/// wrinkles: the states then classify the principal stresses (both >= 0,
+/// one < 0, both <= 0: where the fabric would wrinkle), and the panel
+/// says so.
+fn wrinkling_panel(hist: &History, tension_field: Option<bool>) -> Panel {
+    let (title, labels) = if tension_field == Some(false) {
+        (
+            "Stress state, no tension-field model (fraction of elements)",
+            [
+                "tension both ways",
+                "compression one way (would wrinkle)",
+                "compression both ways",
+            ],
+        )
+    } else {
+        (
+            "Wrinkling state (fraction of elements)",
+            ["taut", "wrinkled", "slack"],
+        )
+    };
+    let mut ws = Panel::new(title, "fraction");
+    for (k, (c, label)) in ["taut_fraction", "wrinkled_fraction", "slack_fraction"]
+        .iter()
+        .zip(labels)
+        .enumerate()
     {
         if let Some(v) = column(hist, c) {
             let [r, g, b] = WRINKLE_COLOURS[k];

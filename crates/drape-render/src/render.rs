@@ -722,6 +722,10 @@ impl Scene {
                 &style,
             );
         }
+        // The tie-break of coplanar surfaces: obstacles are pushed back by
+        // a depth bias, so that a fabric lying on a face — or a little
+        // into it, as penalty contact leaves it — is drawn over it (and,
+        // drawn first, it keeps the pixels of an exact tie).
         let bias = 3e-3 * self.region.diagonal();
         for t in self.obstacle_tris(f.entry.time) {
             let v = t.p.map(|p| cam.vertex(p, bias));

@@ -89,6 +89,34 @@ struct NamedMonitor {
     name: Option<String>,
 }
 
+#[derive(Debug, Deserialize)]
+struct MaterialOf {
+    material: Option<WrinklingOf>,
+}
+
+#[derive(Debug, Deserialize)]
+struct WrinklingOf {
+    wrinkling: Option<TensionField>,
+}
+
+/// `[material] wrinkling`, as the library spells it.
+#[derive(Debug, Deserialize, PartialEq)]
+#[serde(rename_all = "kebab-case")]
+enum TensionField {
+    None,
+    StressProjection,
+    RelaxedEnergy,
+}
+
+/// Whether a scenario's material has a tension-field model (`[material]
+/// wrinkling` other than `"none"`, whose default it is); `None` when the
+/// text does not parse.
+pub fn has_tension_field(text: &str) -> Option<bool> {
+    let m = toml::from_str::<MaterialOf>(text).ok()?;
+    let wrinkling = m.material.and_then(|m| m.wrinkling);
+    Some(wrinkling.is_some_and(|w| w != TensionField::None))
+}
+
 /// The names of the `[[monitor]]` tables of a scenario's text (none when
 /// the text does not parse: the renderer reads scenarios leniently).
 pub fn monitor_names(text: &str) -> Vec<String> {

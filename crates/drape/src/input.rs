@@ -61,32 +61,6 @@ pub fn read(path: &Path) -> io::Result<Vec<u8>> {
     std::fs::read(path)
 }
 
-#[cfg(all(test, unix))]
-mod tests {
-    use super::*;
-
-    /// A FIFO and a device are refused by kind without blocking; a
-    /// directory too; a regular file is read.
-    #[test]
-    fn only_regular_files_are_read() {
-        let dir = std::env::temp_dir().join(format!("drape-input-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let fifo = dir.join("pipe");
-        let status = std::process::Command::new("mkfifo").arg(&fifo).status();
-        if status.is_ok_and(|s| s.success()) {
-            let e = read(&fifo).unwrap_err();
-            assert!(e.to_string().contains("a FIFO"), "{e}");
-        }
-        let e = read(Path::new("/dev/zero")).unwrap_err();
-        assert!(e.to_string().contains("a device"), "{e}");
-        assert!(read(&dir).unwrap_err().to_string().contains("a directory"));
-        std::fs::write(dir.join("f"), "x").unwrap();
-        assert_eq!(read(&dir.join("f")).unwrap(), b"x");
-        let _ = std::fs::remove_dir_all(&dir);
-    }
-}
-
 /// FNV-1a's initial state (its offset basis).
 const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
 
@@ -143,5 +117,31 @@ impl InputFile {
                 Err(e) => return Err(e),
             }
         }
+    }
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::*;
+
+    /// A FIFO and a device are refused by kind without blocking; a
+    /// directory too; a regular file is read.
+    #[test]
+    fn only_regular_files_are_read() {
+        let dir = std::env::temp_dir().join(format!("drape-input-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let fifo = dir.join("pipe");
+        let status = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if status.is_ok_and(|s| s.success()) {
+            let e = read(&fifo).unwrap_err();
+            assert!(e.to_string().contains("a FIFO"), "{e}");
+        }
+        let e = read(Path::new("/dev/zero")).unwrap_err();
+        assert!(e.to_string().contains("a device"), "{e}");
+        assert!(read(&dir).unwrap_err().to_string().contains("a directory"));
+        std::fs::write(dir.join("f"), "x").unwrap();
+        assert_eq!(read(&dir.join("f")).unwrap(), b"x");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

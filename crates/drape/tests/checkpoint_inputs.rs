@@ -14,7 +14,7 @@ use drape::output::pvd::frame_relative_path;
 use drape::scenario::Scenario;
 use drape::setup::Setup;
 use drape::simulation::{
-    self, Checkpoint, RunControl, RunError, check_resume_inputs, checkpoint_path,
+    self, Checkpoint, Front, RunControl, RunError, check_resume_inputs, checkpoint_path,
 };
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -154,6 +154,7 @@ checkpoint_every = 10
         let control = RunControl {
             stop: Some(&stop),
             resume: false,
+            ..Default::default()
         };
         let result = simulation::run_with(&self.setup(), out, &mut observer, control);
         assert!(
@@ -164,9 +165,14 @@ checkpoint_every = 10
 }
 
 fn resume(setup: &Setup, out: &Path) -> Result<simulation::Summary, RunError> {
+    resume_from(setup, out, Front::CommandLine)
+}
+
+fn resume_from(setup: &Setup, out: &Path, front: Front) -> Result<simulation::Summary, RunError> {
     let control = RunControl {
         stop: None,
         resume: true,
+        front,
     };
     simulation::run_with(setup, out, &mut |_| {}, control)
 }
@@ -179,7 +185,7 @@ fn history(dir: &Path) -> Vec<u8> {
 fn refused(setup: &Setup, out: &Path) -> String {
     let before = history(out);
     let e = match resume(setup, out) {
-        Err(e @ RunError::Resume(_)) => e.to_string(),
+        Err(e @ RunError::Resume { .. }) => e.to_string(),
         other => panic!("expected the resume refused, got {other:?}"),
     };
     assert_eq!(history(out), before, "the history was touched: {e}");
@@ -261,6 +267,18 @@ fn a_changed_input_file_refuses_the_resume_and_unchanged_ones_resume_bit_for_bit
         let e = refused(&case.setup(), &out);
         assert_says(&e, &says);
         assert_says(&e, &[&checkpoint_path(&out).display().to_string()]);
+        // Each front end names its own way to a fresh run (Python said
+        // "without --resume").
+        assert_says(&e, &["start a fresh run (without --resume)"]);
+        match resume_from(&case.setup(), &out, Front::Python) {
+            Err(e @ RunError::Resume { .. }) => {
+                let e = e.to_string();
+                assert_says(&e, &says);
+                assert_says(&e, &["start a fresh run (resume=False)"]);
+                assert!(!e.contains("--resume"), "{e}");
+            }
+            other => panic!("expected the resume refused, got {other:?}"),
+        }
         // Missing: refused before the scenario would fail to read it.
         std::fs::remove_file(file).unwrap();
         let missing = check_resume_inputs(&out).unwrap_err().to_string();

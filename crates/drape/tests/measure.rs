@@ -577,6 +577,17 @@ fn tester_not_found_says_why() {
     let file = "[mesh]\nshape = \"file\"\npath = \"square.msh\"";
     let e = find(&scenario(file, CYLINDER, WEIGHT), &square, Given::default()).unwrap_err();
     assert!(reason(e).contains("rim is not a circle"));
+    // Its numbers as a person writes them: the centroid of a rim a hair
+    // off the origin was written with 35 decimals (issue 35).
+    let mut off = square.clone();
+    for x in &mut off.nodes {
+        x[0] += 1e-34;
+    }
+    let e = reason(find(&scenario(file, CYLINDER, WEIGHT), &off, Given::default()).unwrap_err());
+    assert!(
+        e.contains("from their centroid [") && e.contains("e-") && !e.contains("0000000000"),
+        "{e}"
+    );
     // Radii that cannot be.
     let e = find(
         &scenario(DISC, CYLINDER, WEIGHT),
@@ -668,9 +679,17 @@ fn a_wider_base_below_the_pedestal_is_not_taken_for_it() {
     let c = measure::measure(&surface(&disc, &y), &gripped).unwrap();
     assert_eq!(a.drape_coefficient, c.drape_coefficient);
     let beside = CYLINDER.replace("radius = 0.09", "radius = 0.1");
-    let e = find(&format!("{CYLINDER}\n{beside}"))
-        .unwrap_err()
-        .to_string();
+    let e = find(&format!("{CYLINDER}\n{beside}")).unwrap_err();
+    // Its own error (a front end that finds no pedestal says nothing of a
+    // drape; one that cannot tell the pedestal says why: `drape plot`).
+    assert_eq!(
+        e,
+        MeasureError::AmbiguousPedestal {
+            obstacles: [0, 1],
+            radii: [0.09, 0.1]
+        }
+    );
+    let e = e.to_string();
     assert!(
         e.contains("--pedestal-radius") && e.contains("obstacle[0]") && e.contains("obstacle[1]"),
         "{e}"

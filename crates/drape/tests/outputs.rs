@@ -174,6 +174,7 @@ fn an_interrupted_run_has_its_checkpointed_frames_on_disk_and_resumes_exactly() 
     let control = RunControl {
         stop: Some(&stop),
         resume: false,
+        ..Default::default()
     };
     let result = simulation::run_with(&s, &out, &mut observer, control);
     assert!(
@@ -198,6 +199,7 @@ fn an_interrupted_run_has_its_checkpointed_frames_on_disk_and_resumes_exactly() 
     let control = RunControl {
         stop: None,
         resume: true,
+        ..Default::default()
     };
     simulation::run_with(&s, &out, &mut |_| {}, control).unwrap();
     let text = |dir: &Path| std::fs::read_to_string(dir.join("history.csv")).unwrap();

@@ -232,9 +232,10 @@ fn a_checkpoint_that_does_not_fit_the_schedule_is_refused() {
         let control = RunControl {
             stop: None,
             resume: true,
+            ..Default::default()
         };
         match simulation::run_with(&s, &dir, &mut |_| {}, control) {
-            Err(e @ RunError::Resume(_)) => assert!(e.to_string().contains(says), "{e}"),
+            Err(e @ RunError::Resume { .. }) => assert!(e.to_string().contains(says), "{e}"),
             other => panic!("{says}: {other:?}"),
         }
         assert!(std::fs::read(dir.join("history.csv")).unwrap() == history);

@@ -420,7 +420,7 @@ impl Bending {
     /// there (one flag per node) is replaced by its positive semi-definite
     /// part ([`crate::psd`]) before it is added (the projected Newton of
     /// `solver::newton`).
-    pub fn add(
+    pub(crate) fn add(
         &self,
         pattern: &SparsePattern,
         y: &[f64],

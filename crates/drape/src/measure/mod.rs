@@ -266,6 +266,18 @@ pub enum MeasureError {
         /// Why not.
         reason: String,
     },
+    /// Two vertical cylinders under the specimen have their tops at one
+    /// height and different radii: which is the pedestal cannot be told.
+    #[error(
+        "which is the pedestal? obstacle[{}] and obstacle[{}] are both vertical cylinders under the specimen with their tops at one height and radii {} m and {} m; give its radius (drape measure --pedestal-radius R)",
+        obstacles[0], obstacles[1], radii[0], radii[1]
+    )]
+    AmbiguousPedestal {
+        /// The two obstacles' indices.
+        obstacles: [usize; 2],
+        /// Their radii (m).
+        radii: [f64; 2],
+    },
     /// The vertical cannot be a direction.
     #[error("the vertical {vertical:?} is not a direction")]
     Vertical {

@@ -26,6 +26,7 @@
 //! nor was given is an error that says why.
 
 use super::{Horizontal, MeasureError};
+use crate::human::{human, human_point};
 use crate::mesh::Mesh;
 use crate::scenario::{LoadKindSpec, MeshShape, ObstacleSpec, Scenario};
 use crate::vec3;
@@ -118,8 +119,9 @@ impl DrapeTester {
     /// documentation).
     ///
     /// # Errors
-    /// [`MeasureError::NoPedestal`] and [`MeasureError::NotADisc`] saying
-    /// why a radius that was not given cannot be found; those of
+    /// [`MeasureError::NoPedestal`], [`MeasureError::AmbiguousPedestal`]
+    /// and [`MeasureError::NotADisc`] saying why a radius that was not
+    /// given cannot be found; those of
     /// [`DrapeTester::new`].
     pub fn find(
         scenario: Option<&Scenario>,
@@ -141,16 +143,14 @@ impl DrapeTester {
             .fold(0.0, f64::max);
         let pedestal = match scenario {
             Some(s) => find_pedestal(s, &up, rim_center, reach, time),
-            None => Err("no scenario to find it in".to_owned()),
+            None => Err(MeasureError::NoPedestal {
+                reason: "no scenario to find it in".to_owned(),
+            }),
         };
         let (pedestal_radius, pedestal_source) = match (given.pedestal_radius, &pedestal) {
             (Some(r), _) => (r, "given".to_owned()),
             (None, Ok(p)) => (p.radius, format!("obstacle[{}]", p.index)),
-            (None, Err(reason)) => {
-                return Err(MeasureError::NoPedestal {
-                    reason: reason.clone(),
-                });
-            }
+            (None, Err(e)) => return Err(e.clone()),
         };
         let axis = pedestal.as_ref().ok().map(|p| p.axis_point);
         let (specimen_radius, specimen_source, disc_center) = match given.specimen_radius {
@@ -207,14 +207,15 @@ struct Pedestal {
 
 /// The vertical cylinder under the specimen (its axis within `reach` of
 /// `rim_center`) whose top is highest (the nearest axis of equal tops and
-/// radii); or why there is none, or why the choice is ambiguous.
+/// radii); or why there is none ([`MeasureError::NoPedestal`]), or why
+/// the choice is ambiguous ([`MeasureError::AmbiguousPedestal`]).
 fn find_pedestal(
     scenario: &Scenario,
     up: &Horizontal,
     rim_center: [f64; 3],
     reach: f64,
     time: f64,
-) -> Result<Pedestal, String> {
+) -> Result<Pedestal, MeasureError> {
     let cos_tolerance = VERTICAL_TOLERANCE_DEGREES.to_radians().cos();
     let mut cylinders = 0;
     let mut vertical = 0;
@@ -253,10 +254,10 @@ fn find_pedestal(
             Some((t, d, p)) => {
                 if (top - t).abs() <= TOP_TIE * reach.max(f64::MIN_POSITIVE) {
                     if pedestal.radius != p.radius {
-                        return Err(format!(
-                            "obstacle[{}] and obstacle[{index}] are both vertical cylinders under the specimen with their tops at one height and radii {} m and {} m: give the pedestal's radius (--pedestal-radius)",
-                            p.index, p.radius, pedestal.radius
-                        ));
+                        return Err(MeasureError::AmbiguousPedestal {
+                            obstacles: [p.index, index],
+                            radii: [p.radius, pedestal.radius],
+                        });
                     }
                     if distance < d {
                         Some((top, distance, pedestal))
@@ -272,20 +273,20 @@ fn find_pedestal(
         };
     }
     let k = up.vertical();
-    match best {
-        Some((_, _, p)) => Ok(p),
-        None if cylinders == 0 => {
-            Err("the scenario has no [[obstacle]] of shape \"cylinder\"".into())
-        }
-        None if vertical == 0 => Err(format!(
-            "no cylinder obstacle has its axis along the vertical [{}, {}, {}] (within {VERTICAL_TOLERANCE_DEGREES} degree)",
-            k[0], k[1], k[2]
-        )),
-        None => Err(format!(
-            "no vertical cylinder obstacle stands under the specimen (its axis within {reach} m of the initial rim's centre [{}, {}, {}])",
-            rim_center[0], rim_center[1], rim_center[2]
-        )),
-    }
+    let reason = match best {
+        Some((_, _, p)) => return Ok(p),
+        None if cylinders == 0 => "the scenario has no [[obstacle]] of shape \"cylinder\"".into(),
+        None if vertical == 0 => format!(
+            "no cylinder obstacle has its axis along the vertical {} (within {VERTICAL_TOLERANCE_DEGREES} degree)",
+            human_point(k)
+        ),
+        None => format!(
+            "no vertical cylinder obstacle stands under the specimen (its axis within {} m of the initial rim's centre {})",
+            human(reach),
+            human_point(rim_center)
+        ),
+    };
+    Err(MeasureError::NoPedestal { reason })
 }
 
 /// The specimen's radius from the scenario's mesh, its source and the
@@ -309,8 +310,8 @@ fn specimen_of(
             let k = up.vertical();
             if k[2].abs() < cos_tolerance {
                 return Err(not_a_disc(format!(
-                    "the [mesh] disc lies in a plane z = constant, which is not horizontal for the vertical [{}, {}, {}]",
-                    k[0], k[1], k[2]
+                    "the [mesh] disc lies in a plane z = constant, which is not horizontal for the vertical {}",
+                    human_point(k)
                 )));
             }
             let disc_center = scenario.mesh.center.unwrap_or([0.0; 3]);
@@ -328,8 +329,10 @@ fn specimen_of(
             let smallest = radii.iter().copied().fold(f64::INFINITY, f64::min);
             if largest.is_nan() || largest <= 0.0 || largest - smallest > RIM_TOLERANCE * largest {
                 return Err(not_a_disc(format!(
-                    "the initial mesh's rim is not a circle: its nodes lie {smallest} m to {largest} m from their centroid [{}, {}, {}]",
-                    center[0], center[1], center[2]
+                    "the initial mesh's rim is not a circle: its nodes lie {} m to {} m from their centroid {}",
+                    human(smallest),
+                    human(largest),
+                    human_point(center)
                 )));
             }
             Ok((largest, "initial rim".into(), None))

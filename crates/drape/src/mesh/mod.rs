@@ -37,6 +37,28 @@ pub use validate::MeshError;
 /// take another cap).
 pub const MAX_MESH_NODES: usize = 3_000_000;
 
+/// Refuses `count` nodes in `file` (found at `at`) when they are more than
+/// the cap `limit`: a Gmsh `$Nodes` section's declared count (`declared`,
+/// before any node is read) or the number of an OBJ vertex past it.
+pub(crate) fn check_node_cap(
+    file: &str,
+    at: Location,
+    count: u64,
+    declared: bool,
+    limit: usize,
+) -> Result<(), MeshReadError> {
+    if usize::try_from(count).is_ok_and(|n| n <= limit) {
+        return Ok(());
+    }
+    Err(MeshReadError::TooManyNodes {
+        file: file.to_owned(),
+        at: Some(at),
+        count,
+        declared,
+        limit,
+    })
+}
+
 /// Lagrange order of the triangles of a mesh.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum ElementOrder {

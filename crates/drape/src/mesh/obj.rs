@@ -48,7 +48,7 @@
 
 use std::path::Path;
 
-use super::{ElementOrder, MAX_MESH_NODES, Mesh};
+use super::{ElementOrder, MAX_MESH_NODES, Mesh, check_node_cap};
 
 pub use super::{Location, MeshReadError};
 
@@ -226,15 +226,7 @@ fn write_vertices(
             continue;
         };
         vertices += 1;
-        if !usize::try_from(vertices).is_ok_and(|n| n <= max_nodes) {
-            return Err(MeshReadError::TooManyNodes {
-                file: file.to_owned(),
-                at: Some(Location::Line(line)),
-                count: vertices,
-                declared: false,
-                limit: max_nodes,
-            });
-        }
+        check_node_cap(file, Location::Line(line), vertices, false, max_nodes)?;
         let (xyz, w) = match values {
             [x, y, z] | [x, y, z, _, _, _] => ([*x, *y, *z], None),
             [x, y, z, w] => ([*x, *y, *z], Some(*w)),

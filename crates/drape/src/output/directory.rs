@@ -25,12 +25,19 @@ use std::path::{Path, PathBuf};
 /// The lock file's name.
 pub const LOCK_FILE: &str = "drape.lock";
 
+/// The copy of the scenario a run was started with.
+pub const SCENARIO_COPY: &str = "scenario.toml";
+
+/// The file naming the scenario a run was started with (its absolute
+/// path, in the path's own bytes).
+pub const SCENARIO_PATH: &str = "scenario.path";
+
 /// The files drape writes at the top of an output directory (besides the
 /// `fields/` folder and temporary files).
 pub const OWN_FILES: [&str; 7] = [
     LOCK_FILE,
-    "scenario.toml",
-    "scenario.path",
+    SCENARIO_COPY,
+    SCENARIO_PATH,
     "history.csv",
     "summary.json",
     "checkpoint.bin",
@@ -70,7 +77,7 @@ pub enum DirectoryError {
         /// The directory.
         dir: PathBuf,
         /// What it is instead.
-        what: &'static str,
+        what: NotARun,
     },
     /// It is not a directory, or cannot be created, read or locked.
     #[error("cannot use {path} as the output directory: {error}")]
@@ -86,6 +93,30 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> DirectoryError + '_ {
     move |error| DirectoryError::Io {
         path: path.to_path_buf(),
         error,
+    }
+}
+
+/// What a resume's directory is instead of a run's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NotARun {
+    /// Nothing is there.
+    Missing,
+    /// Something other than a directory is there.
+    NotADirectory,
+    /// A directory without any of [`RUN_FILES`].
+    NoRun,
+}
+
+impl std::fmt::Display for NotARun {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            NotARun::Missing => f.write_str("no such directory"),
+            NotARun::NotADirectory => f.write_str("not a directory"),
+            NotARun::NoRun => {
+                let [a, b, c] = RUN_FILES;
+                write!(f, "it holds no drape run (no {a}, {b} or {c})")
+            }
+        }
     }
 }
 
@@ -145,7 +176,7 @@ pub fn lock(dir: &Path) -> Result<OutputLock, DirectoryError> {
 
 /// The files of which one marks a directory as holding a run, for a
 /// resume: the checkpoint, the summary, the scenario's path.
-pub const RUN_FILES: [&str; 3] = ["checkpoint.bin", "summary.json", "scenario.path"];
+pub const RUN_FILES: [&str; 3] = ["checkpoint.bin", "summary.json", SCENARIO_PATH];
 
 /// Takes the lock of the directory a resume continues in, which must exist
 /// and hold a run (one of [`RUN_FILES`]): nothing is created in a
@@ -161,15 +192,13 @@ pub fn lock_resume(dir: &Path) -> Result<OutputLock, DirectoryError> {
     };
     if !dir.is_dir() {
         return not_a_run(if dir.exists() {
-            "not a directory"
+            NotARun::NotADirectory
         } else {
-            "no such directory"
+            NotARun::Missing
         });
     }
     if !RUN_FILES.iter().any(|f| dir.join(f).is_file()) {
-        return not_a_run(
-            "it holds no drape run (no checkpoint.bin, summary.json or scenario.path)",
-        );
+        return not_a_run(NotARun::NoRun);
     }
     lock(dir)
 }
@@ -248,7 +277,7 @@ pub fn clear_previous_outputs(
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
         if matches!(
             name.as_deref(),
-            Some(LOCK_FILE | "scenario.toml" | "scenario.path")
+            Some(LOCK_FILE | SCENARIO_COPY | SCENARIO_PATH)
         ) {
             continue;
         }

@@ -169,7 +169,7 @@ pub enum CheckpointError {
     /// An input file (the mesh, an obstacle's mesh) has changed since the
     /// checkpoint was written.
     #[error(
-        "the input file {path} ({key}) has changed since the checkpoint was written{moved}: resuming would go on with other inputs than the run started with. Restore the file as it was, or start a fresh run (without --resume)",
+        "the input file {path} ({key}) has changed since the checkpoint was written{moved}: resuming would go on with other inputs than the run started with. Restore the file as it was, or start a fresh run",
         path = path.display(),
         moved = moved_from(path, recorded)
     )]
@@ -183,7 +183,7 @@ pub enum CheckpointError {
     },
     /// An input file the checkpoint recorded cannot be read any more.
     #[error(
-        "the input file {path} ({key}) recorded in the checkpoint cannot be read ({error}): restore it as it was, or start a fresh run (without --resume)",
+        "the input file {path} ({key}) recorded in the checkpoint cannot be read ({error}): restore it as it was, or start a fresh run",
         path = path.display()
     )]
     InputMissing {
@@ -927,24 +927,24 @@ fn read_contact(
 }
 
 #[cfg(unix)]
-fn path_to_bytes(path: &Path) -> Vec<u8> {
+pub(super) fn path_to_bytes(path: &Path) -> Vec<u8> {
     use std::os::unix::ffi::OsStrExt;
     path.as_os_str().as_bytes().to_vec()
 }
 
 #[cfg(not(unix))]
-fn path_to_bytes(path: &Path) -> Vec<u8> {
+pub(super) fn path_to_bytes(path: &Path) -> Vec<u8> {
     path.to_string_lossy().into_owned().into_bytes()
 }
 
 #[cfg(unix)]
-fn path_from_bytes(bytes: &[u8]) -> PathBuf {
+pub(super) fn path_from_bytes(bytes: &[u8]) -> PathBuf {
     use std::os::unix::ffi::OsStrExt;
     std::ffi::OsStr::from_bytes(bytes).into()
 }
 
 #[cfg(not(unix))]
-fn path_from_bytes(bytes: &[u8]) -> PathBuf {
+pub(super) fn path_from_bytes(bytes: &[u8]) -> PathBuf {
     String::from_utf8_lossy(bytes).into_owned().into()
 }
 

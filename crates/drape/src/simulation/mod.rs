@@ -29,6 +29,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 mod checkpoint;
 mod frames;
 pub mod schedule;
+mod session;
 mod start;
 mod summary;
 mod warnings;
@@ -42,12 +43,14 @@ use crate::solver::NewtonError;
 pub use checkpoint::{Checkpoint, CheckpointError, Counters};
 use frames::Snapshot;
 use schedule::{RestWatch, StepController, fastest_node};
+pub use session::{Explained, Front, Session};
 use start::Start;
 pub use start::{ResumeError, SetupError, check_resume_inputs};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+pub use summary::Summary;
+use summary::record_failure;
 use summary::{Figures, initial_summary, summary, write_summary};
-pub use summary::{Summary, record_failure, record_refused_resume};
 pub use warnings::{MAX_MOTION_PER_STEP, warnings};
 
 /// What the observer hears after each converged step.
@@ -136,8 +139,13 @@ pub enum RunError {
         message: String,
     },
     /// The checkpoint, history or collection to resume from is unusable.
-    #[error("cannot resume: {0}")]
-    Resume(ResumeError),
+    #[error("cannot resume: {}", Explained { error, front: *front })]
+    Resume {
+        /// Why.
+        error: ResumeError,
+        /// Whose user reads it ([`RunControl::front`]).
+        front: Front,
+    },
     /// The run failed, and `summary.json` could not say so either.
     #[error("{cause}; summary.json could not be written either: {error}")]
     Unrecorded {
@@ -305,6 +313,8 @@ pub struct RunControl<'a> {
     pub stop: Option<&'a AtomicBool>,
     /// Continue from the checkpoint in the output directory.
     pub resume: bool,
+    /// The front end whose user reads the messages.
+    pub front: Front,
 }
 
 /// The checkpoint file in an output directory.
@@ -342,7 +352,7 @@ pub fn run_with(
         // The loop's own ends (a failed step, an I/O error while stepping,
         // an interruption) and a set-up that failed wrote their summary.
         Ok(summary) => Ok(summary),
-        Err(e @ (RunError::Resume(_) | RunError::Io { .. })) if !recorded => {
+        Err(e @ (RunError::Resume { .. } | RunError::Io { .. })) if !recorded => {
             // A refused resume keeps the counts of the session before it
             // (its history and checkpoint are left as they were); a fresh
             // run that could not start records its initial state.
@@ -386,7 +396,7 @@ fn run_session(
         written,
         initial_frame,
     } = if control.resume {
-        start::resume(setup, out, &mut ws)?
+        start::resume(setup, out, &mut ws, control.front)?
     } else {
         start::fresh(setup, out, &mut ws, &x, start)?
     };

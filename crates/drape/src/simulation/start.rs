@@ -6,7 +6,9 @@ use super::checkpoint::{Checkpoint, CheckpointError, Counters};
 use super::frames::Snapshot;
 use super::schedule::{ScheduleMismatch, StepController};
 use super::summary::Figures;
-use super::{History, RunError, StepRecord, checkpoint_path, contact_report, history_columns};
+use super::{
+    Front, History, RunError, StepRecord, checkpoint_path, contact_report, history_columns,
+};
 use super::{io_err, setup_failure};
 use crate::input::InputFile;
 use crate::integrator::newmark::DynamicWorkspace;
@@ -62,7 +64,7 @@ pub enum ResumeError {
     },
     /// A frame the checkpoint lists is not on disk.
     #[error(
-        "{}: the frame {} it lists is missing: the collection would name a file that is not there; restore the frames, or start a fresh run (without --resume)",
+        "{}: the frame {} it lists is missing: the collection would name a file that is not there; restore the frames, or start a fresh run",
         checkpoint.display(),
         frame.display()
     )]
@@ -82,9 +84,20 @@ pub enum ResumeError {
     },
 }
 
-impl From<ResumeError> for RunError {
-    fn from(e: ResumeError) -> Self {
-        RunError::Resume(e)
+impl ResumeError {
+    /// Whether the message ends suggesting a fresh run (a changed or
+    /// missing input file, a missing frame): a front end then says how
+    /// to ask for one ([`Explained`](super::Explained)).
+    pub fn suggests_fresh_run(&self) -> bool {
+        matches!(
+            self,
+            ResumeError::MissingFrame { .. }
+                | ResumeError::Checkpoint {
+                    error: CheckpointError::InputChanged { .. }
+                        | CheckpointError::InputMissing { .. },
+                    ..
+                }
+        )
     }
 }
 
@@ -99,7 +112,7 @@ impl From<ResumeError> for RunError {
 /// The check comes before the scenario is built, so that a changed file
 /// is reported as such rather than as an error of its contents (a mesh
 /// that no longer reads) or of the model's sizes.
-pub fn check_resume_inputs(out: &Path) -> Result<(), RunError> {
+pub fn check_resume_inputs(out: &Path) -> Result<(), ResumeError> {
     let path = checkpoint_path(out);
     let Ok(bytes) = std::fs::read(&path) else {
         return Ok(());
@@ -121,7 +134,7 @@ pub fn check_resume_inputs(out: &Path) -> Result<(), RunError> {
                 error,
             },
         };
-        return Err(ResumeError::Checkpoint { path, error }.into());
+        return Err(ResumeError::Checkpoint { path, error });
     }
     Ok(())
 }
@@ -144,34 +157,39 @@ pub(super) struct Start<'a> {
 /// A resumed session: the checkpoint in `out` read and checked against
 /// `setup` (and the frames it lists found on disk) before the history
 /// and the collection are cut back to it; `ws` takes its external forces.
+/// A refusal is said in `front`'s words.
 pub(super) fn resume<'a>(
     setup: &'a Setup,
     out: &Path,
     ws: &mut DynamicWorkspace,
+    front: Front,
 ) -> Result<Start<'a>, RunError> {
+    let refused = |error| RunError::Resume { error, front };
     let path = checkpoint_path(out);
-    let unusable = |error| ResumeError::Checkpoint {
-        path: path.clone(),
-        error,
+    let unusable = |error| {
+        refused(ResumeError::Checkpoint {
+            path: path.clone(),
+            error,
+        })
     };
     let bytes = std::fs::read(&path).map_err(|e| unusable(CheckpointError::Io(e)))?;
     let ck = Checkpoint::read(&bytes, setup).map_err(unusable)?;
     // Checked before the history and the collection are cut back.
-    let controller =
-        step_controller(setup, &ck.counters).map_err(|error| ResumeError::Schedule {
+    let controller = step_controller(setup, &ck.counters).map_err(|error| {
+        refused(ResumeError::Schedule {
             path: path.clone(),
             error,
-        })?;
+        })
+    })?;
     if let Some((_, k)) = ck
         .frames
         .iter()
         .find(|(_, k)| !out.join(frame_relative_path(*k as u64)).is_file())
     {
-        return Err(ResumeError::MissingFrame {
+        return Err(refused(ResumeError::MissingFrame {
             checkpoint: path,
             frame: out.join(frame_relative_path(*k as u64)),
-        }
-        .into());
+        }));
     }
     ws.f_ext.copy_from_slice(&ck.external_forces);
     // The summary counts the linear solves of the whole run.
@@ -204,9 +222,11 @@ pub(super) fn resume<'a>(
             &history_columns(setup),
             ck.counters.step.saturating_add(1),
         )
-        .map_err(|error| ResumeError::History {
-            path: history_path.clone(),
-            error,
+        .map_err(|error| {
+            refused(ResumeError::History {
+                path: history_path.clone(),
+                error,
+            })
         })?,
         scratch,
         last,

@@ -140,7 +140,7 @@ impl Figures {
 ///
 /// # Errors
 /// The summary could not be written.
-pub fn record_failure(
+pub(super) fn record_failure(
     out: &Path,
     setup: Option<&Setup>,
     keep_previous: bool,
@@ -175,12 +175,16 @@ pub fn record_failure(
 /// longer reads): status `"failed"`, message `"cannot resume: {why}"`, the
 /// counts of the session the history and checkpoint come from kept (see
 /// [`record_failure`]; a `"completed"` run's summary is left alone).
-/// Returns the message. The command line and the Python package record
-/// their refusals with it, so that they say the same.
+/// Returns the message. Both front ends record their refusals with it,
+/// through [`Session::refuse`](super::Session::refuse), so that they say
+/// the same.
 ///
 /// # Errors
 /// The summary could not be written.
-pub fn record_refused_resume(out: &Path, why: &dyn std::fmt::Display) -> std::io::Result<String> {
+pub(super) fn record_refused_resume(
+    out: &Path,
+    why: &dyn std::fmt::Display,
+) -> std::io::Result<String> {
     let message = format!("cannot resume: {why}");
     record_failure(out, None, true, &message).map(|()| message)
 }

@@ -1197,40 +1197,13 @@ pub(super) mod tests {
     /// factor serves a chord step.
     #[test]
     fn an_indefinite_system_goes_to_the_block_lu_before_lu() {
-        use crate::solver::SparsePattern;
-        let n = 45;
-        let p = SparsePattern::triangle_grid(n, n);
-        let (ptr, rows) = p.node_graph();
-        let mut v = vec![0.0; p.nnz()];
-        for b in 0..(n + 1) * (n + 1) {
-            let deg = (ptr[b + 1] - ptr[b] - 1) as f64;
-            for q in ptr[b]..ptr[b + 1] {
-                for i in 0..3 {
-                    let x = if rows[q] == b { deg + 0.05 } else { -1.0 };
-                    v[p.entry(q, b, i, i)] = if i == 2 { -x } else { x };
-                }
-            }
-        }
+        let (p, v) = indefinite_grid(45, 0.0);
         let dim = p.dimension();
         assert!(dim > BLOCK_LU_MAX_SYMMETRIC);
         let b: Vec<f64> = (0..dim).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
         for mode in [LinearMode::Direct, LinearMode::Auto] {
-            let mut solver = LinearSolver::new(&p.col_ptr, &p.row_idx)
-                .unwrap()
-                .with_transpose(p.transpose_map().to_vec())
-                .with_node_blocks(ptr, rows)
-                .with_mode(mode);
-            let mut x = b.clone();
-            assert_eq!(
-                solver.solve(&v, true, &mut x).unwrap(),
-                Factorization::BlockLu,
-                "{mode:?}"
-            );
-            assert_eq!(solver.stats.cholesky_factorizations, 1);
-            assert_eq!(solver.stats.block_lu_factorizations, 1);
-            assert_eq!(solver.stats.lu_factorizations, 0);
-            let r = residual(&p.col_ptr, &p.row_idx, &v, &x, &b);
-            assert!(r < 1e-10, "{mode:?}: residual {r:e}");
+            let mut solver = node_block_solver(&p, mode);
+            solved_by_block_lu(&mut solver, &p, &v, true, &b, 1);
             // Newton's chord steps reuse the block LU's factor.
             let b2: Vec<f64> = (0..dim).map(|i| ((i * 3) % 7) as f64 - 3.0).collect();
             let mut x2 = b2.clone();
@@ -1338,5 +1311,157 @@ pub(super) mod tests {
         let mut x = b.clone();
         assert_eq!(solver.solve(&v, true, &mut x).unwrap(), Factorization::Lu);
         assert!(residual(&cp, &ri, &v, &x, &b) < 1e-12);
+    }
+
+    /// A system on the node graph of `n x n` squares (two triangles each),
+    /// 3x3 diagonal blocks: a shifted graph Laplacian on components x and
+    /// y, its negative on z (indefinite), plus a skew coupling `skew`
+    /// between neighbours (non-symmetric unless 0; the symmetric part is
+    /// the indefinite one).
+    fn indefinite_grid(n: usize, skew: f64) -> (crate::solver::SparsePattern, Vec<f64>) {
+        let p = crate::solver::SparsePattern::triangle_grid(n, n);
+        let (ptr, rows) = p.node_graph();
+        let mut v = vec![0.0; p.nnz()];
+        for b in 0..(n + 1) * (n + 1) {
+            let deg = (ptr[b + 1] - ptr[b] - 1) as f64;
+            for q in ptr[b]..ptr[b + 1] {
+                let r = rows[q];
+                for i in 0..3 {
+                    let x = if r == b { deg + 0.05 } else { -1.0 };
+                    let x = if i == 2 { -x } else { x };
+                    let s = match r.cmp(&b) {
+                        std::cmp::Ordering::Less => skew,
+                        std::cmp::Ordering::Greater => -skew,
+                        std::cmp::Ordering::Equal => 0.0,
+                    };
+                    v[p.entry(q, b, i, i)] = x + s;
+                }
+            }
+        }
+        (p, v)
+    }
+
+    /// A non-symmetric system with node blocks goes to the node-block LU
+    /// (its `L D U` path): first in `direct`; in `reuse`, after Cholesky
+    /// of the symmetric part refused it (indefinite) — no pivoting LU
+    /// either way — to a residual of 1e-10.
+    #[test]
+    fn a_nonsymmetric_system_goes_to_the_block_lu() {
+        let n = 8;
+        let (p, v) = indefinite_grid(n, 0.3);
+        let b: Vec<f64> = (0..p.dimension())
+            .map(|i| ((i * 7) % 5) as f64 - 2.0)
+            .collect();
+        for (mode, choleskys) in [(LinearMode::Direct, 0), (LinearMode::Reuse, 1)] {
+            solved_by_block_lu(
+                &mut node_block_solver(&p, mode),
+                &p,
+                &v,
+                false,
+                &b,
+                choleskys,
+            );
+        }
+    }
+
+    /// A solver of `p`'s systems in `mode`, with its transpose map and
+    /// node blocks.
+    fn node_block_solver(p: &crate::solver::SparsePattern, mode: LinearMode) -> LinearSolver {
+        let (ptr, rows) = p.node_graph();
+        LinearSolver::new(&p.col_ptr, &p.row_idx)
+            .unwrap()
+            .with_transpose(p.transpose_map().to_vec())
+            .with_node_blocks(ptr, rows)
+            .with_mode(mode)
+    }
+
+    /// Solves `v x = b` with `solver`, which must take the node-block LU
+    /// once, after `choleskys` Cholesky factorisations and without the
+    /// pivoting LU, to a residual of 1e-10.
+    fn solved_by_block_lu(
+        solver: &mut LinearSolver,
+        p: &crate::solver::SparsePattern,
+        v: &[f64],
+        symmetric: bool,
+        b: &[f64],
+        choleskys: usize,
+    ) {
+        let mode = solver.mode;
+        let mut x = b.to_vec();
+        assert_eq!(
+            solver.solve(v, symmetric, &mut x).unwrap(),
+            Factorization::BlockLu,
+            "{mode:?}"
+        );
+        assert_eq!(solver.stats.cholesky_factorizations, choleskys, "{mode:?}");
+        assert_eq!(solver.stats.block_lu_factorizations, 1, "{mode:?}");
+        assert_eq!(solver.stats.lu_factorizations, 0, "{mode:?}");
+        let r = residual(&p.col_ptr, &p.row_idx, v, &x, b);
+        assert!(r < 1e-10, "{mode:?}: residual {r:e}");
+    }
+
+    /// A non-symmetric system the node-block LU cannot factorise (a zero
+    /// pivot block: nodes 0 and 3 swap their unknowns, `[[0, I], [I, 0]]`,
+    /// which needs pivoting between nodes) is solved by the pivoting LU:
+    /// `x` is `b` with the two nodes' components exchanged.
+    #[test]
+    fn a_zero_pivot_block_falls_back_to_lu() {
+        let p = crate::solver::SparsePattern::triangle_grid(1, 1);
+        let (ptr, rows) = p.node_graph();
+        let mut v = vec![0.0; p.nnz()];
+        for b in 0..4 {
+            for q in ptr[b]..ptr[b + 1] {
+                let r = rows[q];
+                let one = matches!((r, b), (0, 3) | (3, 0)) || (r == b && (b == 1 || b == 2));
+                if one {
+                    for i in 0..3 {
+                        v[p.entry(q, b, i, i)] = 1.0;
+                    }
+                }
+                // A non-symmetric coupling the LU must carry: node 1
+                // feels node 0's x.
+                if (r, b) == (1, 0) {
+                    v[p.entry(q, b, 0, 0)] = 0.5;
+                }
+            }
+        }
+        let mut solver = LinearSolver::new(&p.col_ptr, &p.row_idx)
+            .unwrap()
+            .with_transpose(p.transpose_map().to_vec())
+            .with_node_blocks(ptr, rows);
+        let b: Vec<f64> = (0..12).map(|i| i as f64 + 1.0).collect();
+        let mut x = b.clone();
+        assert_eq!(solver.solve(&v, false, &mut x).unwrap(), Factorization::Lu);
+        assert_eq!(solver.stats.block_lu_factorizations, 1);
+        assert_eq!(solver.stats.lu_factorizations, 1);
+        assert!(residual(&p.col_ptr, &p.row_idx, &v, &x, &b) < 1e-12);
+        // Nodes 0 and 3 exchanged: x_0 = b_3, x_3 = b_0.
+        assert_eq!(&x[0..3], &b[9..12]);
+        assert_eq!(&x[9..12], &b[0..3]);
+    }
+
+    /// A pattern with an empty column (unknown 2 coupled to nothing, not
+    /// even to itself) leaves the sparse LU without a pivot at the step
+    /// that eliminates it: the error says so, with the step and the
+    /// system's size. (Zero values on a full pattern give a solution that
+    /// is not finite instead: [`a_singular_matrix_is_named_in_the_error`].)
+    #[test]
+    fn an_empty_column_is_a_missing_pivot() {
+        let (cp, ri, v) = (vec![0, 2, 4, 4], vec![0, 1, 0, 1], vec![2.0, 1.0, 1.0, 2.0]);
+        let e = LinearSolver::new(&cp, &ri)
+            .unwrap()
+            .solve(&v, false, &mut [1.0; 3])
+            .unwrap_err();
+        assert_eq!(e.matrix, Matrix::Hessian);
+        assert!(
+            matches!(e.failure, SolveFailure::NoPivot { dimension: 3, .. }),
+            "{e:?}"
+        );
+        assert!(
+            e.to_string().starts_with(
+                "the Hessian is singular (sparse LU found no pivot at elimination step"
+            ) && e.to_string().ends_with("of 3)"),
+            "{e}"
+        );
     }
 }

@@ -356,11 +356,7 @@ fn descend(
                 ws.h[p] = d + tau * d.abs();
             }
         }
-        for (d, g) in ws.dy.iter_mut().zip(&ws.g) {
-            *d = -g;
-        }
-        report.factorization = Some(ws.linear.solve(&ws.h, symmetric, &mut ws.dy)?);
-        system.transform_increment(&mut ws.dy);
+        solve_for_increment(system, ws, report, symmetric)?;
         slope = dot(&ws.g, &ws.dy);
         report.shifts += 1;
         tau *= 10.0;
@@ -644,14 +640,26 @@ fn direction(
     symmetric: bool,
     relative: f64,
 ) -> Result<(), NewtonError> {
-    for (d, g) in ws.dy.iter_mut().zip(&ws.g) {
-        *d = -g;
-    }
     // Inexact Newton (Eisenstat & Walker 1996): Krylov solves need only
     // reduce their residual as far as Newton's has fallen since the
     // step's first iterate, so the tolerance is |G| / |G_0| (keeping
     // quadratic convergence), between 1e-4 and 1e-12.
     ws.linear.krylov_tolerance = relative.clamp(1e-12, 1e-4);
+    solve_for_increment(system, ws, report, symmetric)
+}
+
+/// `ws.dy = -H^-1 G` with the Hessian (as it stands, shifted or not) and
+/// the residual in `ws`, transformed by the system; the factorisation
+/// used goes into `report`.
+fn solve_for_increment(
+    system: &impl NewtonSystem,
+    ws: &mut NewtonWorkspace,
+    report: &mut NewtonReport,
+    symmetric: bool,
+) -> Result<(), NewtonError> {
+    for (d, g) in ws.dy.iter_mut().zip(&ws.g) {
+        *d = -g;
+    }
     report.factorization = Some(ws.linear.solve(&ws.h, symmetric, &mut ws.dy)?);
     system.transform_increment(&mut ws.dy);
     Ok(())

@@ -73,16 +73,7 @@ impl<'a> Reader<'a> {
     /// Refuses a `$Nodes` section that declares (at `at`) more than
     /// [`Reader::max_nodes`] nodes, before any is read.
     pub(super) fn check_node_count(&self, count: u64, at: Location) -> Result<(), MeshReadError> {
-        if usize::try_from(count).is_ok_and(|n| n <= self.max_nodes) {
-            return Ok(());
-        }
-        Err(MeshReadError::TooManyNodes {
-            file: self.file.to_owned(),
-            at: Some(at),
-            count,
-            declared: true,
-            limit: self.max_nodes,
-        })
+        super::super::check_node_cap(self.file, at, count, true, self.max_nodes)
     }
 
     pub(super) fn here(&self) -> Location {
