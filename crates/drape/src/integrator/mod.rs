@@ -146,6 +146,17 @@ impl NewtonSystem for StepSystem<'_> {
         ContactModel::rotate_back(&self.active, dy);
     }
 
+    /// The smallest fraction of `dy` any term of the step admits
+    /// ([`StepTerm::max_step`]): the line search starts there.
+    fn max_step(&self, y: &[f64], dy: &[f64]) -> f64 {
+        let ctx = StepContext {
+            time: self.time,
+            contact: self.contact.as_deref(),
+            project: None,
+        };
+        self.potential.max_step(&ctx, y, dy)
+    }
+
     fn project(&mut self, nodes: Option<&[bool]>) {
         self.projecting = nodes.is_some();
         if let Some(nodes) = nodes {

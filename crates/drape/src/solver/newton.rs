@@ -26,7 +26,10 @@
 //! times without an energy and ten with one (a backtracking line search:
 //! contact makes `G` only piecewise smooth, and a full step can overshoot
 //! a node's entry into or exit from contact; Nocedal & Wright 2006,
-//! §3.1).
+//! §3.1). The search starts at the system's [`NewtonSystem::max_step`]
+//! when that is below 1 (a barrier's collision-free step), and a trial
+//! whose energy is not finite is never taken: when every trial has one,
+//! the solve fails ([`NewtonError::NoAdmissibleStep`]).
 //!
 //! When a full step's increment is above the tolerance (so the iteration
 //! cannot end there) and no chord step will follow, the trial point's
@@ -220,6 +223,17 @@ pub enum NewtonError {
         /// Re-solutions tried.
         rounds: usize,
     },
+    /// The line search found no admissible point along the Newton
+    /// direction: the system admits no step of it (`max_step` not
+    /// positive), or every trial down to the shortest had an energy that
+    /// is not finite (a barrier crossed).
+    #[error("no admissible step at iteration {iteration}: {why} along the Newton direction")]
+    NoAdmissibleStep {
+        /// Iteration.
+        iteration: usize,
+        /// Why: the system's limit, or the energy.
+        why: &'static str,
+    },
 }
 
 /// What an evaluation of the system reports besides `G` and `H`.
@@ -260,6 +274,14 @@ pub trait NewtonSystem {
     /// `G` and `H` are evaluated again at `y`). Default: never.
     fn revise(&mut self, _y: &[f64]) -> bool {
         false
+    }
+
+    /// The largest fraction of the increment `dy` from `y` the system
+    /// admits (a barrier's: the step that no collision cuts, Li et al.
+    /// 2020); the line search starts there, and a chord step that it would
+    /// cut is not taken. Default 1: no limit.
+    fn max_step(&self, _y: &[f64], _dy: &[f64]) -> f64 {
+        1.0
     }
 }
 
@@ -577,14 +599,17 @@ fn ended(
     Ok(false)
 }
 
-/// The line search along `ws.dy` from `ws.y_old` (the module docs): a
-/// full step, halved while it neither lowers the residual below
-/// `residual` nor, with an energy (`energy0` and the direction's `slope`),
-/// meets Armijo's condition — down to 1/16 of the step (1/1024 with an
-/// energy), which is taken whatever it gives. `y` and `eval` are left at
-/// the step taken, its Hessian assembled if `hessian_at_trial` and the
-/// full step was taken. Returns the step's fraction `alpha`, its residual
-/// and whether its Hessian was assembled.
+/// The line search along `ws.dy` from `ws.y_old` (the module docs): the
+/// full step or the system's [`NewtonSystem::max_step`] if smaller,
+/// halved while it neither lowers the residual below `residual` nor, with
+/// an energy (`energy0` and the direction's `slope`), meets Armijo's
+/// condition — down to 1/16 of the first (1/1024 with an energy), which
+/// is taken whatever it gives unless its energy is not finite: a trial of
+/// infinite energy (a barrier crossed) is never taken, and the search
+/// fails instead. `y` and `eval` are left at the step taken, its Hessian
+/// assembled if `hessian_at_trial` and the first step was taken. Returns
+/// the step's fraction `alpha`, its residual and whether its Hessian was
+/// assembled; `Err(why)` when no step is admissible.
 fn backtrack(
     system: &mut impl NewtonSystem,
     y: &mut [f64],
@@ -593,13 +618,21 @@ fn backtrack(
     (energy0, slope): (Option<f64>, f64),
     residual: f64,
     mut hessian_at_trial: bool,
-) -> (f64, f64, bool) {
-    let shortest = if energy0.is_some() {
-        1.0 / 1024.0
-    } else {
-        1.0 / 16.0
-    };
-    let mut alpha = 1.0;
+) -> Result<(f64, f64, bool), &'static str> {
+    let first = system.max_step(&ws.y_old, &ws.dy);
+    if !(first > 0.0) {
+        return Err("the system admits no step");
+    }
+    let mut alpha = first.min(1.0);
+    // A first step the system cut short is no full step: its Hessian is
+    // not assembled with the trial (nor is it one a chord step reuses).
+    hessian_at_trial &= alpha == 1.0;
+    let shortest = alpha
+        * if energy0.is_some() {
+            1.0 / 1024.0
+        } else {
+            1.0 / 16.0
+        };
     loop {
         for ((yi, y0), d) in y.iter_mut().zip(&ws.y_old).zip(&ws.dy) {
             *yi = y0 + alpha * d;
@@ -622,8 +655,12 @@ fn backtrack(
             _ => (false, true),
         };
         let smaller = trial <= (1.0 - 1e-4 * alpha) * residual && not_higher;
-        if (trial.is_finite() && (smaller || armijo)) || alpha <= shortest {
-            return (alpha, trial, hessian_at_trial);
+        let infinite = eval.energy.is_some_and(|e| !e.is_finite());
+        if !infinite && ((trial.is_finite() && (smaller || armijo)) || alpha <= shortest) {
+            return Ok((alpha, trial, hessian_at_trial));
+        }
+        if infinite && alpha <= shortest {
+            return Err("every trial down to the shortest had an energy that is not finite");
         }
         alpha *= 0.5;
         // (A shortened step is accepted with a residual only.)
@@ -783,7 +820,11 @@ pub fn solve(
             (energy0, slope),
             residual,
             hessian_at_trial,
-        );
+        )
+        .map_err(|why| NewtonError::NoAdmissibleStep {
+            iteration: report.iterations + 1,
+            why,
+        })?;
         report.residuals.push(residual);
         increment = alpha * increment_of(settings, &ws.dy, length);
         report.increments.push(increment);
@@ -860,7 +901,9 @@ fn chord_steps(
         }
         system.transform_increment(&mut ws.dy);
         let step = increment_of(settings, &ws.dy, length);
-        if step.is_nan() || step > 0.25 * *increment {
+        // A chord step the system would cut short is left to a Newton
+        // step, whose line search starts below the limit.
+        if step.is_nan() || step > 0.25 * *increment || system.max_step(y, &ws.dy) < 1.0 {
             return moved;
         }
         ws.y_old.copy_from_slice(y);
@@ -869,7 +912,8 @@ fn chord_steps(
         }
         let trial_eval = system.evaluate(y, &mut ws.g, None);
         let trial = trial_eval.merit.unwrap_or_else(|| norm(&ws.g));
-        if !(trial.is_finite() && trial < *residual) {
+        let infinite = trial_eval.energy.is_some_and(|e| !e.is_finite());
+        if infinite || !(trial.is_finite() && trial < *residual) {
             // Undo: back to the Newton iterate, its residual re-evaluated
             // (the system keeps per-evaluation state).
             y.copy_from_slice(&ws.y_old);
@@ -1226,5 +1270,129 @@ mod tests {
         };
         solve(&mut plain, &mut y, 1.0, &settings, &mut workspace()).unwrap();
         assert!(!at_a_minimum(&y), "plain Newton found the maximum: {y:?}");
+    }
+
+    /// `E(y) = sum_i (y_i - 2)^2 / 2 - kappa ln(1 - y_i)` for every `y_i < 1`,
+    /// infinite beyond (a barrier at 1); `G` beyond it is the quadratic's
+    /// alone, a smaller residual than inside (so that only the energy can
+    /// tell the trial is not admissible). With `limit`, `max_step` keeps
+    /// the step to `limit` of the way to the barrier. Records every point
+    /// evaluated.
+    struct Barrier {
+        kappa: f64,
+        limit: Option<f64>,
+        seen: Vec<[f64; 3]>,
+    }
+
+    impl NewtonSystem for Barrier {
+        fn evaluate(&mut self, y: &[f64], g: &mut [f64], h: Option<&mut [f64]>) -> Evaluation {
+            self.seen.push([y[0], y[1], y[2]]);
+            let inside = y.iter().all(|&v| v < 1.0);
+            let mut energy = 0.0;
+            for i in 0..3 {
+                let gap = 1.0 - y[i];
+                g[i] = y[i] - 2.0 + if inside { self.kappa / gap } else { 0.0 };
+                energy += 0.5 * (y[i] - 2.0).powi(2) - self.kappa * gap.ln();
+            }
+            if let Some(h) = h {
+                h.fill(0.0);
+                for i in 0..3 {
+                    h[4 * i] = 1.0 + self.kappa / (1.0 - y[i]).powi(2);
+                }
+            }
+            Evaluation {
+                scale: 1.0,
+                symmetric: true,
+                merit: None,
+                energy: Some(if inside { energy } else { f64::INFINITY }),
+            }
+        }
+
+        fn max_step(&self, y: &[f64], dy: &[f64]) -> f64 {
+            let Some(limit) = self.limit else {
+                return 1.0;
+            };
+            (0..3)
+                .filter(|&i| dy[i] > 0.0)
+                .map(|i| limit * (1.0 - y[i]) / dy[i])
+                .fold(1.0, f64::min)
+        }
+    }
+
+    /// The minimum inside the barrier, `y = (3 - sqrt(1 + 4 kappa)) / 2`.
+    fn barrier_minimum(kappa: f64) -> f64 {
+        0.5 * (3.0 - (1.0 + 4.0 * kappa).sqrt())
+    }
+
+    /// Issue 33's seam: the first Newton step from 0 jumps past the
+    /// barrier (to 1.73), where the energy is infinite though the residual
+    /// is smaller. Without a limit the line search rejects that trial and
+    /// halves into the admissible region; with the system's `max_step`
+    /// (half the way to the barrier) no point beyond it is ever evaluated.
+    /// Both end at the minimum inside, quadratically.
+    #[test]
+    fn the_line_search_rejects_infinite_energy_and_starts_below_max_step() {
+        let settings = NewtonSettings {
+            chord_steps: 0,
+            projection: Projection::Never,
+            ..NewtonSettings::default()
+        };
+        let exact = barrier_minimum(0.1);
+        for limit in [None, Some(0.5)] {
+            let mut system = Barrier {
+                kappa: 0.1,
+                limit,
+                seen: Vec::new(),
+            };
+            let mut y = [0.0; 3];
+            let report = solve(&mut system, &mut y, 1.0, &settings, &mut workspace()).unwrap();
+            assert!(
+                y.iter().all(|v| (v - exact).abs() < 1e-12),
+                "{limit:?}: {y:?}"
+            );
+            let beyond = system.seen.iter().filter(|p| p[0] >= 1.0).count();
+            if limit.is_some() {
+                assert_eq!(beyond, 0, "{:?}", system.seen);
+            } else {
+                assert!(beyond > 0, "the full step was tried: {:?}", system.seen);
+            }
+            // Quadratic to round-off (1e-14: the residual's floor here).
+            let r = &report.residuals;
+            let n = r.len();
+            assert!(r[n - 1] <= 10.0 * r[n - 2].powi(2) + 1e-14, "{r:?}");
+            assert!(r[n - 2] <= 10.0 * r[n - 3].powi(2) + 1e-14, "{r:?}");
+        }
+    }
+
+    /// A start a hair below the barrier with a stiff pull outwards: every
+    /// trial down to 1/1024 of the Newton step lies beyond it. The step
+    /// is an error (the time step is then cut back), not the shortest
+    /// trial taken — which put the state inside the obstacle before.
+    #[test]
+    fn no_admissible_step_is_an_error() {
+        let settings = NewtonSettings {
+            projection: Projection::Never,
+            ..NewtonSettings::default()
+        };
+        let mut system = Barrier {
+            kappa: 1e-12,
+            limit: None,
+            seen: Vec::new(),
+        };
+        let mut y = [1.0 - 1e-7; 3];
+        let e = solve(&mut system, &mut y, 1.0, &settings, &mut workspace()).unwrap_err();
+        assert!(
+            matches!(e, NewtonError::NoAdmissibleStep { iteration: 1, .. }),
+            "{e}"
+        );
+        assert!(e.to_string().contains("not finite"), "{e}");
+        // A system that admits no step at all says so.
+        let mut stuck = Barrier {
+            kappa: 0.1,
+            limit: Some(0.0),
+            seen: Vec::new(),
+        };
+        let e = solve(&mut stuck, &mut [0.0; 3], 1.0, &settings, &mut workspace()).unwrap_err();
+        assert!(e.to_string().contains("admits no step"), "{e}");
     }
 }
