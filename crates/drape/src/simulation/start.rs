@@ -199,8 +199,7 @@ pub(super) fn resume<'a>(
     if !ws.newton.linear.restore(&ck.linear) {
         return Err(unusable(CheckpointError::Invalid(
             "its kept linear-solver state (the matrix a preconditioner was made from) does not fit the scenario's Hessian, or cannot be factorised again".into(),
-        ))
-        .into());
+        )));
     }
     let entries = ck
         .frames

@@ -620,7 +620,7 @@ fn backtrack(
     mut hessian_at_trial: bool,
 ) -> Result<(f64, f64, bool), &'static str> {
     let first = system.max_step(&ws.y_old, &ws.dy);
-    if !(first > 0.0) {
+    if first.is_nan() || first <= 0.0 {
         return Err("the system admits no step");
     }
     let mut alpha = first.min(1.0);
