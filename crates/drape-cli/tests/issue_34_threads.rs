@@ -8,9 +8,11 @@
 
 mod issue_19_support;
 
-use issue_19_support::{falling_sheet, scratch, send, spawn_run_with, summary, wait_for_history};
+use issue_19_support::{
+    DRAPE, falling_sheet, scratch, send, spawn_run_with, summary, wait_for_history,
+};
 use std::path::{Path, PathBuf};
-use std::process::{Child, ExitStatus};
+use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
 /// The repository's root (two folders above this crate).
@@ -143,6 +145,48 @@ fn multigrid_on_a_big_mesh_gives_the_same_history_on_one_and_two_threads() {
     let extra = "[[fix]]\nboundary = true\n[solver]\nlinear = \"iterative\"\n[output]\nevery = 100";
     let scenario = falling_sheet(&dir, [150, 150], 3, extra);
     same_history_on_one_and_two_threads(&scenario, &dir, "multigrid sheet");
+}
+
+/// Under a one-CPU affinity (`taskset -c 0`, what a container limited to
+/// one core gives) and without `RAYON_NUM_THREADS`, rayon's pool and the
+/// helper thread see one CPU: the big sheet must end within two minutes,
+/// its summary saying one thread, with the two-thread history byte for
+/// byte.
+#[test]
+fn a_big_mesh_under_a_one_cpu_affinity_does_not_hang() {
+    if Command::new("taskset").arg("--version").output().is_err() {
+        eprintln!("taskset (util-linux) is not installed: the affinity case is not run here");
+        return;
+    }
+    let dir = scratch("affinity");
+    let scenario = big_sheet(&dir, 8);
+    let two = dir.join("two");
+    let status = wait_within(
+        spawn_with_threads(&scenario, &two, 2),
+        Duration::from_secs(120),
+        "two threads",
+    );
+    assert!(status.success(), "two threads: {status}");
+    let one = dir.join("one");
+    let child = Command::new("taskset")
+        .args(["-c", "0", DRAPE, "run"])
+        .arg(&scenario)
+        .arg("--out")
+        .arg(&one)
+        .arg("--quiet")
+        .env_remove("RAYON_NUM_THREADS")
+        .stdin(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn taskset");
+    let status = wait_within(child, Duration::from_secs(120), "one-CPU affinity");
+    assert!(status.success(), "one-CPU affinity: {status}");
+    assert_eq!(summary(&one)["threads"], 1, "the run saw more than one CPU");
+    let history = |out: &Path| std::fs::read(out.join("history.csv")).expect("history.csv");
+    assert!(
+        history(&one) == history(&two),
+        "the one-CPU history differs from the two-thread one"
+    );
 }
 
 /// SIGINT during a one-thread run of the big sheet ends it as on two
