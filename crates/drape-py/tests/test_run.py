@@ -203,8 +203,10 @@ def test_an_output_directory_of_someone_else_is_refused(tmp_path):
     out = tmp_path / "theirs"
     out.mkdir()
     (out / "notes.txt").write_text("mine")
-    with pytest.raises(drape.OutputError, match="notes.txt"):
+    with pytest.raises(drape.OutputError, match="notes.txt") as refused:
         drape.run(short_pedestal(), out=out)
+    # It names Python's argument too, not only the command line's option.
+    assert "out= from Python" in str(refused.value)
     assert (out / "notes.txt").read_text() == "mine"
 
 

@@ -50,7 +50,7 @@ pub const OWN_FILES: [&str; 7] = [
 pub enum DirectoryError {
     /// Another process writes into it.
     #[error(
-        "{dir} is in use by another drape process{}: wait for it to end, or write elsewhere (--out)",
+        "{dir} is in use by another drape process{}: wait for it to end, or write into another directory (--out; out= from Python)",
         pid.map(|p| format!(" (process {p})")).unwrap_or_default()
     )]
     Busy {
@@ -61,7 +61,7 @@ pub enum DirectoryError {
     },
     /// It holds files drape did not write.
     #[error(
-        "{dir} holds files drape did not write ({}): a fresh run writes only into an empty directory or one of its own earlier outputs; choose another --out, or move them away",
+        "{dir} holds files drape did not write ({}): a fresh run writes only into an empty directory or one of its own earlier outputs; choose another directory (--out; out= from Python), or move them away",
         entries.join(", ")
     )]
     Foreign {
