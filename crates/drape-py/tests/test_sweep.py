@@ -221,6 +221,22 @@ def test_a_killed_sweep_runs_only_the_missing_cases(tmp_path):
     assert len({r["corner_z"] for r in rows}) == 6
 
 
+def test_a_sweep_killed_while_writing_a_scenario_runs_the_case_again(tmp_path):
+    # Killed between writing a case's scenario to its temporary copy and
+    # renaming it, a sweep leaves the copy in the case's directory, which
+    # drape refuses as a file it did not write ("holds files drape did
+    # not write"): the case failed on every re-run. The re-run removes it.
+    base = short_pedestal()
+    sweep = make_sweep(tmp_path, 'base = "base.toml"\n[parameters]\n"material.youngs_modulus" = [2.0e6]\n', base)
+    out = tmp_path / "out"
+    case = out / "cases" / "0000"
+    case.mkdir(parents=True)
+    (case / ".scenario.toml.tmp-4242").write_text("half a scenario")
+    rows = drape.sweep(sweep, out=out, workers=1, progress=False)
+    assert rows[0]["status"] == "completed", rows[0]["message"]
+    assert not list(case.glob(".scenario.toml.tmp-*"))
+
+
 def test_an_interrupted_sweep_resumes_its_cases(tmp_path):
     # Ctrl-C (SIGINT to the driver and its worker, as a terminal sends it)
     # stops the running case after its step with a checkpoint; the next

@@ -141,6 +141,12 @@ def _run_locked(task: Dict[str, Any], case_dir: Path, outcome: Any) -> Dict[str,
     """:func:`run_case` once the case's lock is held."""
     text = task["text"]
     case_dir.mkdir(parents=True, exist_ok=True)
+    # A sweep killed between writing the scenario's temporary copy and
+    # renaming it leaves the copy behind, and drape refuses a directory
+    # holding files it did not write: the case would fail on every re-run.
+    # The lock is ours, so any such copy is a dead process's.
+    for stale in case_dir.glob(".scenario.toml.tmp-*"):
+        stale.unlink(missing_ok=True)
     scenario = case_dir / "scenario.toml"
     same = same_scenario(case_dir, text)
     previous = summary_of(case_dir)
