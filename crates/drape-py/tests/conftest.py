@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -25,6 +26,16 @@ import drape
 from drape import _drape
 
 REPO = Path(__file__).resolve().parents[3]
+
+
+def default_sigint() -> None:
+    """``preexec_fn`` of a child that a test interrupts with SIGINT: the
+    signal's default disposition, whatever the test run's own. A shell
+    starts a background job with SIGINT ignored, the child inherits that,
+    and Python then installs no KeyboardInterrupt handler — the child
+    would never see the test's Ctrl-C (a fresh clone's tests run that way
+    failed so)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 EXAMPLES = REPO / "examples"
 PEDESTAL = EXAMPLES / "fabric-on-pedestal.toml"
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import PEDESTAL, drape, pedestal, short_pedestal, write_scenario
+from conftest import PEDESTAL, default_sigint, drape, pedestal, short_pedestal, write_scenario
 
 # The tolerance the issue asks for. Both paths call the same library on the
 # same text, so they agree to the last bit; 1e-9 m leaves room for nothing
@@ -267,6 +267,7 @@ def test_ctrl_c_stops_the_run_as_the_command_line_does(tmp_path):
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=default_sigint,
     )
     history = out / "history.csv"
     deadline = time.monotonic() + 60

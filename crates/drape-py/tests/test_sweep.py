@@ -17,7 +17,7 @@ except ModuleNotFoundError:  # Python < 3.11
 
 import pytest
 
-from conftest import drape, pedestal, run_module, short_pedestal, write_scenario
+from conftest import default_sigint, drape, pedestal, run_module, short_pedestal, write_scenario
 
 SPEC_COLUMNS = ["steps", "time", "newton_iterations", "wall_seconds", "first_contact_time"]
 
@@ -52,6 +52,7 @@ def start_sweep(sweep: Path, out: Path) -> subprocess.Popen:
         stderr=subprocess.PIPE,
         text=True,
         start_new_session=True,
+        preexec_fn=default_sigint,
     )
 
 
