@@ -229,13 +229,15 @@ fn check(path: &Path) -> Result<(), Failure> {
     let m = &setup.model;
     println!("{}: ok", path.display());
     println!("  title     {}", setup.title);
+    let pieces = m.mesh().pieces().1;
     println!(
-        "  mesh      {} nodes, {} triangles of order {}, {} DOF ({} fixed)",
+        "  mesh      {} nodes, {} triangles of order {}, {} DOF ({} fixed), {pieces} {}",
         m.mesh().node_count(),
         m.mesh().element_count(),
         m.mesh().order.degree(),
         m.dofs(),
-        m.fixed_count()
+        m.fixed_count(),
+        if pieces == 1 { "piece" } else { "pieces" }
     );
     let mass_kind = match m.mass_kind() {
         drape::model::MassKind::Consistent => "consistent",

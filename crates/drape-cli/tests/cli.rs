@@ -407,6 +407,29 @@ fn shorten_replaces_one_line_and_multi_line_schedules() {
 // ---------------------------------------------------------------------------
 // drape check / drape run on the examples
 
+/// A mesh of two plies (issue 33) is checked as two pieces.
+#[test]
+fn check_counts_the_pieces_of_a_mesh() {
+    let tmp = TempDir::new("check-pieces");
+    let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("../drape/tests/meshes/two-plies-t3.msh");
+    let scenario = tmp.path().join("plies.toml");
+    std::fs::write(
+        &scenario,
+        format!(
+            "[mesh]\nshape = \"file\"\npath = {:?}\n[material]\nyoungs_modulus = 2.0e6\npoisson_ratio = 0.3\ndensity = 320.0\nthickness = 0.6e-3\n[time]\nsegments = [{{ steps = 1, dt = 1.0e-3 }}]\n",
+            mesh
+        ),
+    )
+    .unwrap();
+    let o = drape(tmp.path(), &["check".as_ref(), scenario.as_os_str()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe("check", &o));
+    assert!(
+        stdout(&o).contains("324 triangles of order 1") && stdout(&o).contains(", 2 pieces\n"),
+        "{}",
+        describe("check", &o)
+    );
+}
+
 #[test]
 fn check_accepts_every_example_and_prints_the_node_count() {
     let tmp = TempDir::new("check-examples");
@@ -418,6 +441,8 @@ fn check_accepts_every_example_and_prints_the_node_count() {
         let nodes = node_count_in(&stdout(&o))
             .unwrap_or_else(|| panic!("{}", describe(&format!("{what}: no `N nodes`"), &o)));
         assert!(nodes > 0, "{}", describe(&what, &o));
+        // Every example's mesh is one piece.
+        assert!(stdout(&o).contains(", 1 piece\n"), "{}", describe(&what, &o));
         // `check` runs nothing and writes nothing.
         assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0, "{what}");
     }

@@ -168,8 +168,9 @@ pub fn run(
 ///         TOML's structure.
 ///
 /// Returns:
-///     dict: ``title``, ``nodes``, ``elements``, ``order``, ``dofs``,
-///     ``fixed_dofs``, ``mass`` (kg) and ``monitors`` (name -> node index).
+///     dict: ``title``, ``nodes``, ``elements``, ``pieces`` (the mesh's
+///     disconnected pieces), ``order``, ``dofs``, ``fixed_dofs``, ``mass``
+///     (kg) and ``monitors`` (name -> node index).
 ///
 /// Raises:
 ///     ScenarioError: with the file, the key and the line of what is wrong.
@@ -184,6 +185,7 @@ pub fn check<'py>(py: Python<'py>, scenario: &Bound<'py, PyAny>) -> PyResult<Bou
     let info = PyDict::new(py);
     info.set_item("title", &setup.title)?;
     info.set_item("nodes", m.mesh().node_count())?;
+    info.set_item("pieces", m.mesh().pieces().1)?;
     info.set_item("elements", m.mesh().element_count())?;
     info.set_item("order", m.mesh().order.degree())?;
     info.set_item("dofs", m.dofs())?;

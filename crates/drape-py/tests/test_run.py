@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import PEDESTAL, default_sigint, drape, pedestal, short_pedestal, write_scenario
+from conftest import PEDESTAL, REPO, default_sigint, drape, pedestal, short_pedestal, write_scenario
 
 # The tolerance the issue asks for. Both paths call the same library on the
 # same text, so they agree to the last bit; 1e-9 m leaves room for nothing
@@ -77,6 +77,19 @@ def test_a_scenario_path_that_is_not_utf8_is_kept_in_its_own_bytes(tmp_path):
     out = tmp_path / "out"
     drape.run(scenario, out=out)
     assert (out / "scenario.path").read_bytes() == os.fsencode(scenario.resolve())
+
+
+def test_check_counts_the_pieces_of_a_mesh():
+    # The pedestal's sheet is one piece; the two plies of issue 33's Gmsh
+    # mesh are two.
+    assert drape.check(short_pedestal())["pieces"] == 1
+    plies = short_pedestal()
+    plies["mesh"] = {"shape": "file", "path": str(REPO / "crates/drape/tests/meshes/two-plies-t3.msh")}
+    plies.pop("obstacle", None)
+    plies.pop("contact", None)
+    plies.pop("monitor", None)
+    info = drape.check(plies)
+    assert (info["elements"], info["pieces"]) == (324, 2)
 
 
 def test_the_result_reads_the_outputs(tmp_path):

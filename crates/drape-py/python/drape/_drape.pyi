@@ -62,7 +62,7 @@ def run(
 def check(scenario: Scenario) -> Dict[str, Any]:
     """Validates a scenario and builds its model without running it, as
     ``drape check`` does; returns ``title``, ``nodes``, ``elements``,
-    ``order``, ``dofs``, ``fixed_dofs``, ``mass`` and ``monitors`` (name ->
-    node index). Raises ScenarioError with its file, key and line."""
+    ``pieces`` (the mesh's disconnected pieces), ``order``, ``dofs``,
+    ``fixed_dofs``, ``mass`` and ``monitors`` (name -> node index). Raises ScenarioError with its file, key and line."""
 
 def _scenario_text(scenario: Mapping[str, Any], folder: str, name: str) -> str: ...

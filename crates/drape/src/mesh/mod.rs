@@ -132,6 +132,42 @@ impl Mesh {
             .chunks_exact(self.order.nodes_per_element())
     }
 
+    /// The mesh's disconnected pieces: for each element, the number of its
+    /// piece (0 for the piece of element 0, then in order of first
+    /// element), and the number of pieces. Elements are in one piece when
+    /// a chain of elements sharing nodes joins them (a mesh file of
+    /// several Gmsh surfaces or OBJ groups: plies, a garment's panels).
+    pub fn pieces(&self) -> (Vec<usize>, usize) {
+        let mut parent: Vec<usize> = (0..self.nodes.len()).collect();
+        fn root(parent: &mut [usize], mut a: usize) -> usize {
+            while parent[a] != a {
+                parent[a] = parent[parent[a]];
+                a = parent[a];
+            }
+            a
+        }
+        for el in self.elements() {
+            let first = root(&mut parent, el[0]);
+            for &b in &el[1..] {
+                let rb = root(&mut parent, b);
+                parent[rb] = first;
+            }
+        }
+        let mut number = vec![usize::MAX; self.nodes.len()];
+        let mut count = 0;
+        let piece = (self.elements())
+            .map(|el| {
+                let r = root(&mut parent, el[0]);
+                if number[r] == usize::MAX {
+                    number[r] = count;
+                    count += 1;
+                }
+                number[r]
+            })
+            .collect();
+        (piece, count)
+    }
+
     /// Indices of every node on the free edge (boundary) of the mesh,
     /// sorted: the nodes of element edges that belong to one element only,
     /// including the high-order nodes on those edges.
