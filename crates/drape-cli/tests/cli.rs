@@ -442,7 +442,11 @@ fn check_accepts_every_example_and_prints_the_node_count() {
             .unwrap_or_else(|| panic!("{}", describe(&format!("{what}: no `N nodes`"), &o)));
         assert!(nodes > 0, "{}", describe(&what, &o));
         // Every example's mesh is one piece.
-        assert!(stdout(&o).contains(", 1 piece\n"), "{}", describe(&what, &o));
+        assert!(
+            stdout(&o).contains(", 1 piece\n"),
+            "{}",
+            describe(&what, &o)
+        );
         // `check` runs nothing and writes nothing.
         assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0, "{what}");
     }

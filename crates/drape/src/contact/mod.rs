@@ -25,6 +25,7 @@
 pub mod lagrange;
 pub mod obstacle;
 pub mod penalty;
+pub mod proximity;
 
 pub use obstacle::{Obstacle, ObstacleError, Proximity};
 pub use penalty::PenaltyHessian;
