@@ -79,6 +79,11 @@ mod tests {
     use crate::model::Model;
 
     fn model(mesh: Mesh, rigidity: BendingRigidity) -> Model {
+        builder(mesh, rigidity).build().expect("a valid model")
+    }
+
+    /// The parts of [`model`], to add to.
+    fn builder(mesh: Mesh, rigidity: BendingRigidity) -> crate::model::ModelBuilder {
         Model::builder(
             mesh,
             Box::new(SaintVenantKirchhoff::new(2e6, 0.3)),
@@ -89,8 +94,6 @@ mod tests {
             320.0,
         )
         .bending(rigidity)
-        .build()
-        .expect("a valid model")
     }
 
     /// A 10 cm square (4 x 3 squares, alternating diagonals) of `order`,
@@ -195,19 +198,10 @@ mod tests {
                 .iter()
                 .map(|x| x[0] < -0.0499)
                 .collect::<Vec<_>>();
-            let m = Model::builder(
-                mesh,
-                Box::new(SaintVenantKirchhoff::new(2e6, 0.3)),
-                Section {
-                    thickness: 6e-4,
-                    prestress: 0.0,
-                },
-                320.0,
-            )
-            .bending(BendingRigidity::Isotropic(2e-5))
-            .clamped(clamped)
-            .build()
-            .expect("a valid model");
+            let m = builder(mesh, BendingRigidity::Isotropic(2e-5))
+                .clamped(clamped)
+                .build()
+                .expect("a valid model");
             let bending = m.bending().expect("bending");
             let ghosts = bending
                 .patches()

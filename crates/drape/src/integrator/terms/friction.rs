@@ -210,19 +210,19 @@ impl StepTerm for FrictionTerm<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrator::terms::{check_projection, check_term};
-    use crate::scenario::Scenario;
-    use std::path::Path;
+    use crate::integrator::terms::{check_projection, check_term, contact_patch};
 
     /// A 10 cm patch of 4 x 4 squares pressed 1 mm (vertically) into a
-    /// plane tilted about y, moving along x at 1 cm/s, with friction 0.4 and a slip speed of 1e-3 m/s, over a
-    /// step of 10 ms from its start: the smoothing slip is 1e-5 m.
-    fn pressed_patch() -> (crate::setup::Setup, Vec<f64>) {
-        let text = PRESSED;
-        let path = Path::new("friction.toml");
-        let setup = Scenario::parse(text, path)
-            .and_then(|s| s.build(path, text))
-            .expect("a valid scenario");
+    /// plane tilted about y, moving along x at 1 cm/s, with friction 0.4
+    /// and a slip speed of 1e-3 m/s, over a step of 10 ms from its start
+    /// (the smoothing slip is 1e-5 m), contact by `method` (`[contact]`'s
+    /// keys but friction's).
+    fn pressed_patch_by(method: &str) -> (crate::setup::Setup, Vec<f64>) {
+        let contact = format!(
+            "[[obstacle]]\nshape = \"plane\"\npoint = [0.0, 0.0, -0.1]\nnormal = [-0.3, 0.0, 1.0]\n\
+             velocity = [0.01, 0.0, 0.0]\n[contact]\n{method}\nfriction = 0.4\nstick_speed = 1.0e-3"
+        );
+        let setup = contact_patch(&contact, 1e-2);
         // Every node 1 mm below the tilted plane.
         let start = setup
             .model
@@ -233,30 +233,10 @@ mod tests {
         (setup, start)
     }
 
-    /// The scenario of [`pressed_patch`].
-    const PRESSED: &str = r#"
-[mesh]
-shape = "rectangle"
-size = [0.1, 0.1]
-divisions = [4, 4]
-[material]
-youngs_modulus = 2.0e6
-poisson_ratio = 0.3
-density = 320.0
-thickness = 0.6e-3
-[[obstacle]]
-shape = "plane"
-point = [0.0, 0.0, -0.1]
-normal = [-0.3, 0.0, 1.0]
-velocity = [0.01, 0.0, 0.0]
-[contact]
-method = "penalty"
-penalty = 5.0e4
-friction = 0.4
-stick_speed = 1.0e-3
-[time]
-segments = [{ steps = 1, dt = 1e-2 }]
-"#;
+    /// [`pressed_patch_by`] with a penalty of 5e4 N/m.
+    fn pressed_patch() -> (crate::setup::Setup, Vec<f64>) {
+        pressed_patch_by("method = \"penalty\"\npenalty = 5.0e4")
+    }
 
     /// The friction term of [`pressed_patch`] over a 10 ms step from
     /// `start`, and the contact state it was lagged from.
@@ -322,14 +302,7 @@ segments = [{ steps = 1, dt = 1e-2 }]
     /// plane's.
     #[test]
     fn with_multipliers_the_normal_force_is_the_multiplier() {
-        let (_, start) = pressed_patch();
-        let lagrange = r#"method = "lagrange""#;
-        let text = PRESSED.replace("method = \"penalty\"\npenalty = 5.0e4", lagrange);
-        assert!(text.contains(lagrange));
-        let path = Path::new("friction-lagrange.toml");
-        let setup = Scenario::parse(&text, path)
-            .and_then(|s| s.build(path, &text))
-            .expect("a valid scenario");
+        let (setup, start) = pressed_patch_by("method = \"lagrange\"");
         let model = &setup.model;
         let contact = model.contact().expect("an obstacle");
         let mut state = contact.initial_state(&start);

@@ -20,7 +20,7 @@ pub use penalty::PenaltyTerm;
 
 #[cfg(test)]
 pub(crate) use check::{
-    check_projection, check_term, deformed, patch_builder, patch_model,
+    check_projection, check_term, contact_patch, deformed, patch_builder, patch_model,
     relative_smallest_eigenvalue,
 };
 
@@ -46,6 +46,21 @@ mod check {
         patch_builder(order, material, loads)
             .build()
             .expect("a valid mesh")
+    }
+
+    /// A 10 cm square of 4 x 4 squares (T3, the reference membrane) with
+    /// the scenario tables `contact` (its obstacles and `[contact]`) and
+    /// one step of `dt`, built: the contact terms' test set-up.
+    pub(crate) fn contact_patch(contact: &str, dt: f64) -> crate::setup::Setup {
+        let text = format!(
+            "[mesh]\nshape = \"rectangle\"\nsize = [0.1, 0.1]\ndivisions = [4, 4]\n\
+             [material]\nyoungs_modulus = 2.0e6\npoisson_ratio = 0.3\ndensity = 320.0\nthickness = 0.6e-3\n\
+             {contact}\n[time]\nsegments = [{{ steps = 1, dt = {dt:e} }}]\n"
+        );
+        let path = std::path::Path::new("patch.toml");
+        crate::scenario::Scenario::parse(&text, path)
+            .and_then(|s| s.build(path, &text))
+            .expect("a valid scenario")
     }
 
     /// The parts of [`patch_model`], to add to.

@@ -75,44 +75,18 @@ impl StepTerm for PenaltyTerm<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrator::terms::check_term;
-    use crate::scenario::Scenario;
-    use std::path::Path;
+    use crate::integrator::terms::{check_term, contact_patch};
 
-    /// A 10 cm patch of 4 x 4 squares over a sphere.
-    const PATCH_IN_SPHERE: &str = r#"
-[mesh]
-shape = "rectangle"
-size = [0.1, 0.1]
-divisions = [4, 4]
-[material]
-youngs_modulus = 2.0e6
-poisson_ratio = 0.3
-density = 320.0
-thickness = 0.6e-3
-[[obstacle]]
-shape = "sphere"
-center = [0.0, 0.0, -0.2]
-radius = 0.19
-[contact]
-method = "penalty"
-penalty = 5.0e4
-[time]
-segments = [{ steps = 1, dt = 1e-3 }]
-"#;
-
-    /// The sphere of [`PATCH_IN_SPHERE`].
+    /// The sphere a patch is pressed into.
     const SPHERE: &str = "shape = \"sphere\"\ncenter = [0.0, 0.0, -0.2]\nradius = 0.19";
 
-    /// The patch of [`PATCH_IN_SPHERE`] with `obstacle` (its keys) for the
-    /// sphere, and its nodes lifted into a paraboloid 1.5 cm below the
+    /// A 10 cm patch of 4 x 4 squares with `obstacle` (its keys), penalty
+    /// contact, and its nodes lifted into a paraboloid 1.5 cm below the
     /// plane at its centre.
     fn pressed_patch(obstacle: &str) -> (crate::setup::Setup, Vec<f64>) {
-        let text = PATCH_IN_SPHERE.replace(SPHERE, obstacle);
-        let path = Path::new("patch.toml");
-        let setup = Scenario::parse(&text, path)
-            .and_then(|s| s.build(path, &text))
-            .expect("a valid scenario");
+        let contact =
+            format!("[[obstacle]]\n{obstacle}\n[contact]\nmethod = \"penalty\"\npenalty = 5.0e4");
+        let setup = contact_patch(&contact, 1e-3);
         let y = setup
             .model
             .initial_positions()
