@@ -142,7 +142,7 @@ pub struct Checkpoint {
     /// What the linear solver carries across steps (version 6; none from
     /// an older checkpoint): a resumed `iterative` or `reuse` run rebuilds
     /// the same preconditioner from it.
-    pub linear: KeptLinear,
+    pub kept_linear: KeptLinear,
 }
 
 /// A checkpoint that cannot be used.
@@ -297,7 +297,7 @@ impl Checkpoint {
             b.extend_from_slice(&t.to_le_bytes());
             b.extend_from_slice(&(*step as u64).to_le_bytes());
         }
-        write_kept(&mut b, &self.linear);
+        write_kept(&mut b, &self.kept_linear);
         let hash = fnv1a(&b);
         b.extend_from_slice(&hash.to_le_bytes());
         b
@@ -462,7 +462,7 @@ impl Checkpoint {
         let frames = (0..count)
             .map(|_| Ok((r.f64("frame time")?, r.usize("frame step")?)))
             .collect::<Result<_, CheckpointError>>()?;
-        let linear = if version >= 6 {
+        let kept_linear = if version >= 6 {
             read_kept(&mut r)?
         } else {
             KeptLinear::default()
@@ -486,7 +486,7 @@ impl Checkpoint {
             },
             external_forces,
             frames,
-            linear,
+            kept_linear,
         };
         ck.check_values()?;
         Ok(ck)
@@ -1053,7 +1053,7 @@ mod tests {
             },
             external_forces: v(4.0),
             frames: vec![(0.0, 0), (0.2, 7)],
-            linear: KeptLinear {
+            kept_linear: KeptLinear {
                 multigrid: Some(KeptMultigrid {
                     built_from: Some(vec![4.0, -1.0, 0.5]),
                     fresh_iterations: 7,
@@ -1134,7 +1134,7 @@ mod tests {
     fn as_version(c: &Checkpoint, version: u32) -> Vec<u8> {
         let bytes = c.to_bytes();
         let mut kept = Vec::new();
-        write_kept(&mut kept, &c.linear);
+        write_kept(&mut kept, &c.kept_linear);
         let v5 = seal(bytes[..bytes.len() - 8 - kept.len()].to_vec(), 5);
         if version == 5 {
             return v5;
@@ -1194,7 +1194,7 @@ mod tests {
         let c = sample(true);
         let mut expected = c.clone();
         // Version 5: nothing kept by the linear solver.
-        expected.linear = KeptLinear::default();
+        expected.kept_linear = KeptLinear::default();
         let v5 = Checkpoint::from_bytes(&as_version(&c, 5), 6, 2, 0xdead_beef).unwrap();
         assert_eq!(v5, expected);
         // Version 4: no friction, none dissipated, no linear counts.
@@ -1363,7 +1363,7 @@ mod tests {
         // multigrid flag, its matrix's length and values, its 3 counters;
         // the factor's flag, length and values.
         let mut kept = Vec::new();
-        write_kept(&mut kept, &c.linear);
+        write_kept(&mut kept, &c.kept_linear);
         let kept_at = bytes.len() - 8 - kept.len();
         says(&forge(kept_at, &[3]), "multigrid flag 3 is not 0, 1 or 2");
         says(

@@ -671,7 +671,7 @@ impl Stepper<'_, '_> {
             state: self.state.clone(),
             external_forces: self.ws.f_ext.clone(),
             frames: self.written.clone(),
-            linear: self.ws.newton.linear.kept(),
+            kept_linear: self.ws.newton.linear.kept(),
         };
         let path = checkpoint_path(self.out);
         write_atomic(&path, &ck.to_bytes()).map_err(io_err(&path))

@@ -196,7 +196,7 @@ pub(super) fn resume<'a>(
     ws.newton.linear.stats = ck.counters.linear;
     // The preconditioner kept across steps, made again from the matrix it
     // was made from: the run goes on as if it had not stopped.
-    if !ws.newton.linear.restore(&ck.linear) {
+    if !ws.newton.linear.restore(&ck.kept_linear) {
         return Err(unusable(CheckpointError::Invalid(
             "its kept linear-solver state (the matrix a preconditioner was made from) does not fit the scenario's Hessian, or cannot be factorised again".into(),
         )));
