@@ -7,10 +7,12 @@
 //! energy per unit initial volume `W(e)` (J/m^3), the stress `s = dW/de`
 //! and the tangent `D = ds/de` (3x3, Pa).
 
+mod compression;
 mod orthotropic;
 mod svk;
 pub mod wrinkling;
 
+pub use compression::CompressionSoft;
 pub use orthotropic::{Orthotropic, OrthotropicError};
 pub use svk::{CRITICAL_STRETCH, SaintVenantKirchhoff};
 pub use wrinkling::{WrinkleState, Wrinkling, WrinklingModel};

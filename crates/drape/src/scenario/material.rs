@@ -6,7 +6,7 @@ use super::check::Checker;
 use super::{MaterialModel, MaterialSpec, ScenarioError, WrinklingSpec};
 use crate::bending::BendingRigidity;
 use crate::element::membrane::Section;
-use crate::material::{Material, Orthotropic, SaintVenantKirchhoff, Wrinkling};
+use crate::material::{CompressionSoft, Material, Orthotropic, SaintVenantKirchhoff, Wrinkling};
 
 /// `[material]`: the constitutive law, the section and the density (which
 /// may be 0 in a static analysis). With a wrinkling model the prestress is
@@ -93,6 +93,7 @@ pub(super) fn build_material(
             ),
         ));
     }
+    let ratio = compression_ratio(c, m)?;
     let slack = if is_static { 1e-6 } else { 0.0 };
     let (material, prestress): (Box<dyn Material>, f64) = match (elastic, m.wrinkling.model()) {
         (Elastic::Isotropic(young), None) => (
@@ -106,22 +107,61 @@ pub(super) fn build_material(
             } else {
                 w
             };
-            (Box::new(w), 0.0)
+            let material: Box<dyn Material> = match ratio {
+                Some(r) if r > 0.0 => Box::new(CompressionSoft::new(
+                    Box::new(SaintVenantKirchhoff::new(young, m.poisson_ratio)),
+                    Box::new(w),
+                    r,
+                )),
+                _ => Box::new(w),
+            };
+            (material, 0.0)
         }
         (Elastic::Orthotropic(o), None) => (o, m.prestress),
-        (Elastic::Orthotropic(o), Some(model)) => (
-            Box::new(
-                o.with_wrinkling(model, m.prestress)
-                    .with_slack_tangent(slack),
-            ),
-            0.0,
-        ),
+        (Elastic::Orthotropic(o), Some(model)) => {
+            let w = (*o).clone().with_wrinkling(model, m.prestress).with_slack_tangent(slack);
+            let material: Box<dyn Material> = match ratio {
+                Some(r) if r > 0.0 => Box::new(CompressionSoft::new(o, Box::new(w), r)),
+                _ => Box::new(w),
+            };
+            (material, 0.0)
+        }
     };
     let section = Section {
         thickness,
         prestress,
     };
     Ok((material, section, density))
+}
+
+/// `[material] compression_ratio`: in [0, 1], and only with
+/// `wrinkling = "relaxed-energy"` (the relaxed energy it blends with the
+/// elastic one).
+fn compression_ratio(c: &Checker, m: &MaterialSpec) -> Result<Option<f64>, ScenarioError> {
+    let t = "material";
+    let Some(r) = m.compression_ratio else {
+        return Ok(None);
+    };
+    if m.wrinkling != WrinklingSpec::RelaxedEnergy {
+        return Err(c.invalid(
+            t,
+            None,
+            "compression_ratio",
+            format!(
+                "applies only with wrinkling = \"relaxed-energy\" (the fraction of the elastic compressive stiffness the relaxed energy keeps), not with wrinkling = \"{}\"; remove it or set wrinkling = \"relaxed-energy\"",
+                m.wrinkling.name()
+            ),
+        ));
+    }
+    if !(r.is_finite() && (0.0..=1.0).contains(&r)) {
+        return Err(c.invalid(
+            t,
+            None,
+            "compression_ratio",
+            format!("must lie in [0, 1] (0: no compressive stiffness, 1: the elastic material), not {r}"),
+        ));
+    }
+    Ok(Some(r))
 }
 
 /// The elastic law of `[material] model`, before wrinkling.

@@ -201,6 +201,13 @@ pub struct MaterialSpec {
     /// with `"relaxed-energy"`.
     #[serde(default)]
     pub prestress: f64,
+    /// With `wrinkling = "relaxed-energy"`: the fraction `r` of the elastic
+    /// compressive stiffness the membrane keeps where it is wrinkled or
+    /// slack (`W = r W_el + (1 - r) W_relaxed`, docs/theory.md §1.4), in
+    /// [0, 1], default 0 (Pipkin's relaxed energy). Not allowed with the
+    /// other wrinkling models.
+    #[serde(default)]
+    pub compression_ratio: Option<f64>,
     /// Bending rigidity (docs/theory.md §1.10): a number `B` (N m, >= 0), a table
     /// `{ warp, weft }` (N m each) or `"plate"`; default 0, a pure
     /// membrane. Read by hand for messages naming the inner key.
@@ -245,6 +252,15 @@ impl WrinklingSpec {
             Self::None => None,
             Self::StressProjection => Some(WrinklingModel::StressProjection),
             Self::RelaxedEnergy => Some(WrinklingModel::RelaxedEnergy),
+        }
+    }
+
+    /// The value as the scenario spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::StressProjection => "stress-projection",
+            Self::RelaxedEnergy => "relaxed-energy",
         }
     }
 }

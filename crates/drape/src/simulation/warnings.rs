@@ -49,7 +49,7 @@ fn tension_field_with_bending(setup: &Setup, out: &mut Vec<String>) {
             .is_some()
     {
         out.push(
-            "material.wrinkling is a tension-field model and material.bending_rigidity is set: compressed elements have no in-plane stiffness and, with bending, may collapse, which makes the steps tiny; with bending the mesh resolves the folds, so wrinkling = \"none\" is the model to use (README, \"Bending\")".to_string(),
+            "material.wrinkling is a tension-field model and material.bending_rigidity is set: compressed elements have no (or, with compression_ratio, little) in-plane stiffness and, with bending, contract instead of folding or collapse, which makes the steps tiny; with bending the mesh resolves the folds, so wrinkling = \"none\" is the model to use (README, \"Bending\")".to_string(),
         );
     }
 }
