@@ -22,6 +22,7 @@
 //! A node in contact with several obstacles at once is in contact with the
 //! one it penetrates most (Lagrange), or with all of them (penalty).
 
+pub mod barrier;
 pub mod lagrange;
 pub mod obstacle;
 pub mod penalty;
