@@ -48,7 +48,8 @@ fn energy_scaled(material: &str, sx: f64) -> f64 {
 fn tension_is_elastic_and_compression_is_the_ratio_of_it() {
     for law in [ISOTROPIC, WOVEN] {
         let none = format!("{law}\nwrinkling = \"none\"");
-        let soft = |r: f64| format!("{law}\nwrinkling = \"relaxed-energy\"\ncompression_ratio = {r}");
+        let soft =
+            |r: f64| format!("{law}\nwrinkling = \"relaxed-energy\"\ncompression_ratio = {r}");
         let r = 0.05;
         let taut = energy_scaled(&none, 1.01);
         let stretched = energy_scaled(&soft(r), 1.01);
@@ -57,7 +58,10 @@ fn tension_is_elastic_and_compression_is_the_ratio_of_it() {
         // partly shear there, which the relaxed energy keeps only where
         // both principal stresses pull; the isotropic sheet is taut.
         if law == ISOTROPIC {
-            assert!((stretched / taut - 1.0).abs() < 1e-12, "{stretched} vs {taut}");
+            assert!(
+                (stretched / taut - 1.0).abs() < 1e-12,
+                "{stretched} vs {taut}"
+            );
         }
         let elastic = energy_scaled(&none, 0.99);
         let compressed = energy_scaled(&soft(r), 0.99);
@@ -66,7 +70,10 @@ fn tension_is_elastic_and_compression_is_the_ratio_of_it() {
             "compressed 1 %: elastic {elastic:.6e} J, r = {r}: {compressed:.6e} J, relaxed {relaxed:.6e} J"
         );
         let expected = r * elastic + (1.0 - r) * relaxed;
-        assert!((compressed / expected - 1.0).abs() < 1e-12, "{compressed} vs {expected}");
+        assert!(
+            (compressed / expected - 1.0).abs() < 1e-12,
+            "{compressed} vs {expected}"
+        );
         if law == ISOTROPIC {
             assert!(relaxed.abs() < 1e-20 * elastic, "{relaxed}");
         }
@@ -81,7 +88,12 @@ fn tension_is_elastic_and_compression_is_the_ratio_of_it() {
 /// value.
 #[test]
 fn a_bad_compression_ratio_is_refused_at_its_line() {
-    for (value, shown) in [("1.5", "1.5"), ("-0.1", "-0.1"), ("nan", "NaN"), ("inf", "inf")] {
+    for (value, shown) in [
+        ("1.5", "1.5"),
+        ("-0.1", "-0.1"),
+        ("nan", "NaN"),
+        ("inf", "inf"),
+    ] {
         let text = scenario(&format!(
             "{ISOTROPIC}\nwrinkling = \"relaxed-energy\"\ncompression_ratio = {value}"
         ));
@@ -100,9 +112,17 @@ fn a_bad_compression_ratio_is_refused_at_its_line() {
             &text,
             9,
             "material.compression_ratio",
-            &["relaxed-energy", &format!("not with wrinkling = \"{model}\"")],
+            &[
+                "relaxed-energy",
+                &format!("not with wrinkling = \"{model}\""),
+            ],
         );
     }
     let text = scenario(&format!("{ISOTROPIC}\ncompression_ratio = 0.1"));
-    assert_error(&text, 8, "material.compression_ratio", &["not with wrinkling = \"none\""]);
+    assert_error(
+        &text,
+        8,
+        "material.compression_ratio",
+        &["not with wrinkling = \"none\""],
+    );
 }

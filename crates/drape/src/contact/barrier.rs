@@ -314,13 +314,16 @@ mod tests {
                 let w = kind.closest(&nodes(&x)).weights;
                 // Away from region borders: every weight 0 or clearly not.
                 let near = w.iter().any(|v| v.abs() > 0.0 && v.abs() < 1e-4)
-                    || w.iter().any(|v| (v.abs() - 1.0).abs() < 1e-4 && v.abs() != 1.0);
+                    || w.iter()
+                        .any(|v| (v.abs() - 1.0).abs() < 1e-4 && v.abs() != 1.0);
                 if near {
                     continue;
                 }
                 // The region must not change within the differences' reach.
                 let region = kind.directions(&w).len();
-                *regions.entry((kind == PairKind::EdgeEdge, region)).or_insert(0) += 1;
+                *regions
+                    .entry((kind == PairKind::EdgeEdge, region))
+                    .or_insert(0) += 1;
                 let s = |v: &[f64]| squared_distance(kind, &nodes(v)).0;
                 let g = |v: &[f64]| squared_distance(kind, &nodes(v)).1.to_vec();
                 let h = |v: &[f64]| squared_distance(kind, &nodes(v)).2.to_vec();
@@ -333,8 +336,18 @@ mod tests {
         }
         // Every region was met: face, edge and vertex; inside-inside, one
         // clamped, both clamped.
-        for key in [(false, 0), (false, 1), (false, 2), (true, 0), (true, 1), (true, 2)] {
-            assert!(regions.get(&key).copied().unwrap_or(0) > 3, "{key:?}: {regions:?}");
+        for key in [
+            (false, 0),
+            (false, 1),
+            (false, 2),
+            (true, 0),
+            (true, 1),
+            (true, 2),
+        ] {
+            assert!(
+                regions.get(&key).copied().unwrap_or(0) > 3,
+                "{key:?}: {regions:?}"
+            );
         }
     }
 
@@ -350,7 +363,10 @@ mod tests {
             let (bm, b1m, _) = barrier(s - h, s_hat);
             assert!(b > 0.0 && b1 < 0.0 && b2 > 0.0, "{s}");
             assert!(((bp - bm) / (2.0 * h) - b1).abs() < 1e-6 * b1.abs(), "{s}");
-            assert!(((b1p - b1m) / (2.0 * h) - b2).abs() < 1e-5 * b2.abs(), "{s}");
+            assert!(
+                ((b1p - b1m) / (2.0 * h) - b2).abs() < 1e-5 * b2.abs(),
+                "{s}"
+            );
         }
         let near = barrier(s_hat * (1.0 - 1e-9), s_hat);
         assert!(near.0.abs() < 1e-25 && near.1.abs() < 1e-18 && near.2.abs() < 1e-7);
@@ -367,27 +383,64 @@ mod tests {
         let cases: [(PairKind, [[f64; 3]; 4]); 3] = [
             (
                 PairKind::PointTriangle,
-                [[0.2e-2, 0.3e-2, 0.5e-3], [0.0; 3], [1e-2, 0.0, 0.0], [0.0, 1e-2, 0.0]],
+                [
+                    [0.2e-2, 0.3e-2, 0.5e-3],
+                    [0.0; 3],
+                    [1e-2, 0.0, 0.0],
+                    [0.0, 1e-2, 0.0],
+                ],
             ),
             (
                 PairKind::PointTriangle,
-                [[0.55e-2, 0.55e-2, 0.3e-3], [0.0; 3], [1e-2, 0.0, 1e-4], [0.0, 1e-2, 0.0]],
+                [
+                    [0.55e-2, 0.55e-2, 0.3e-3],
+                    [0.0; 3],
+                    [1e-2, 0.0, 1e-4],
+                    [0.0, 1e-2, 0.0],
+                ],
             ),
             (
                 PairKind::EdgeEdge,
-                [[0.0, 0.0, 0.0], [1e-2, 1e-3, 0.0], [5e-3, -5e-3, 4e-4], [4e-3, 5e-3, 6e-4]],
+                [
+                    [0.0, 0.0, 0.0],
+                    [1e-2, 1e-3, 0.0],
+                    [5e-3, -5e-3, 4e-4],
+                    [4e-3, 5e-3, 6e-4],
+                ],
             ),
         ];
         for (kind, x) in cases {
             let flat: Vec<f64> = x.concat();
             let s = kind.closest(&x).d2;
-            assert!(s < d_hat * d_hat && s > 0.01 * d_hat * d_hat, "{kind:?}: {}", s.sqrt());
-            let e = |v: &[f64]| pair_barrier(kind, &nodes(v), d_hat * d_hat, 1e6, false).unwrap().0;
-            let g = |v: &[f64]| pair_barrier(kind, &nodes(v), d_hat * d_hat, 1e6, false).unwrap().1.to_vec();
-            let h = |v: &[f64]| pair_barrier(kind, &nodes(v), d_hat * d_hat, 1e6, true).unwrap().2.unwrap().to_vec();
+            assert!(
+                s < d_hat * d_hat && s > 0.01 * d_hat * d_hat,
+                "{kind:?}: {}",
+                s.sqrt()
+            );
+            let e = |v: &[f64]| {
+                pair_barrier(kind, &nodes(v), d_hat * d_hat, 1e6, false)
+                    .unwrap()
+                    .0
+            };
+            let g = |v: &[f64]| {
+                pair_barrier(kind, &nodes(v), d_hat * d_hat, 1e6, false)
+                    .unwrap()
+                    .1
+                    .to_vec()
+            };
+            let h = |v: &[f64]| {
+                pair_barrier(kind, &nodes(v), d_hat * d_hat, 1e6, true)
+                    .unwrap()
+                    .2
+                    .unwrap()
+                    .to_vec()
+            };
             let eg = gradient_error(e, g, &flat, 1e-9);
             let eh = jacobian_error(g, h, &flat, 1e-9);
-            assert!(eg < 1e-5 && eh < 1e-5, "{kind:?}: gradient {eg:e}, Hessian {eh:e}");
+            assert!(
+                eg < 1e-5 && eh < 1e-5,
+                "{kind:?}: gradient {eg:e}, Hessian {eh:e}"
+            );
         }
     }
 
@@ -404,11 +457,22 @@ mod tests {
         let t = additive_ccd(PairKind::PointTriangle, &x, &down, 0.0, 0.1, 1.0);
         assert!(t > 0.3 && t < 0.5, "{t}");
         let up = [[0.0, 0.0, 0.2], [0.0; 3], [0.0; 3], [0.0; 3]];
-        assert_eq!(additive_ccd(PairKind::PointTriangle, &x, &up, 0.0, 0.1, 1.0), 1.0);
+        assert_eq!(
+            additive_ccd(PairKind::PointTriangle, &x, &up, 0.0, 0.1, 1.0),
+            1.0
+        );
         let slide = [[0.1, 0.1, 0.0], [0.0; 3], [0.0; 3], [0.0; 3]];
-        assert_eq!(additive_ccd(PairKind::PointTriangle, &x, &slide, 0.0, 0.1, 1.0), 1.0);
+        assert_eq!(
+            additive_ccd(PairKind::PointTriangle, &x, &slide, 0.0, 0.1, 1.0),
+            1.0
+        );
         // Edge (0,0,1)-(1,0,1) falling through edge (0.5,-1,0)-(0.5,1,0).
-        let e = [[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.5, -1.0, 0.0], [0.5, 1.0, 0.0]];
+        let e = [
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [0.5, -1.0, 0.0],
+            [0.5, 1.0, 0.0],
+        ];
         let fall = [[0.0, 0.0, -2.0], [0.0, 0.0, -2.0], [0.0; 3], [0.0; 3]];
         let t = additive_ccd(PairKind::EdgeEdge, &e, &fall, 0.0, 0.1, 1.0);
         assert!(t > 0.4 && t < 0.5, "{t}");

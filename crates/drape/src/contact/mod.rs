@@ -27,6 +27,7 @@ pub mod lagrange;
 pub mod obstacle;
 pub mod penalty;
 pub mod proximity;
+pub mod self_contact;
 
 pub use obstacle::{Obstacle, ObstacleError, Proximity};
 pub use penalty::PenaltyHessian;

@@ -302,6 +302,79 @@ pub fn close_pairs(
     }
 }
 
+/// Whether segment `(p, q)` passes through triangle `(a, b, c)`
+/// (Möller & Trumbore 1997, the segment's parameter in [0, 1]; touching
+/// counts).
+pub fn segment_crosses_triangle(
+    p: [f64; 3],
+    q: [f64; 3],
+    a: [f64; 3],
+    b: [f64; 3],
+    c: [f64; 3],
+) -> bool {
+    let dir = sub(q, p);
+    let (e1, e2) = (sub(b, a), sub(c, a));
+    let pv = crate::vec3::cross(dir, e2);
+    let det = dot(e1, pv);
+    if det.abs() <= 1e-300 {
+        return false;
+    }
+    let inv = 1.0 / det;
+    let tv = sub(p, a);
+    let u = dot(tv, pv) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return false;
+    }
+    let qv = crate::vec3::cross(tv, e1);
+    let v = dot(dir, qv) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return false;
+    }
+    let t = dot(e2, qv) * inv;
+    (0.0..=1.0).contains(&t)
+}
+
+/// The number of (edge, triangle) pairs sharing no node where the edge
+/// passes through the triangle at positions `x`: the fabric crossing
+/// itself (0 for a fabric that never passes through itself). A grid of
+/// cells as large as the longest edge, as [`candidates`].
+pub fn crossings(x: &[[f64; 3]], triangles: &[[usize; 3]], edges: &[[usize; 2]]) -> usize {
+    let longest = edges
+        .iter()
+        .map(|&[a, b]| dot(sub(x[a], x[b]), sub(x[a], x[b])).sqrt())
+        .fold(0.0f64, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let tri_box: Vec<_> = triangles
+        .iter()
+        .map(|t| bounds(t.iter().map(|&a| x[a]), 0.0))
+        .collect();
+    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (k, b) in tri_box.iter().enumerate() {
+        for cell in cells(b, longest) {
+            grid.entry(cell).or_default().push(k);
+        }
+    }
+    let mut found = Vec::new();
+    for (e, &[p, q]) in edges.iter().enumerate() {
+        let b = bounds([x[p], x[q]].into_iter(), 0.0);
+        for cell in cells(&b, longest) {
+            for &k in grid.get(&cell).map_or(&[][..], |v| v) {
+                let t = triangles[k];
+                if !t.contains(&p)
+                    && !t.contains(&q)
+                    && overlap(&b, &tri_box[k])
+                    && segment_crosses_triangle(x[p], x[q], x[t[0]], x[t[1]], x[t[2]])
+                {
+                    found.push((e, k));
+                }
+            }
+        }
+    }
+    found.sort_unstable();
+    found.dedup();
+    found.len()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -507,5 +580,53 @@ mod tests {
             slow.edge_edge.len()
         );
         assert_eq!(fast, slow);
+    }
+
+    /// Two squares of two triangles each, one crossing the other's plane
+    /// through its middle: crossings found; lifted clear: none; the
+    /// segment test's boundary cases.
+    #[test]
+    fn crossings_counts_edges_through_triangles() {
+        let x = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.5, 0.5, -0.5],
+            [0.5, 0.5, 0.5],
+            [0.6, 0.5, 0.5],
+            [0.6, 0.5, -0.5],
+        ];
+        let tris = [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+        let edges = edges_of(&tris);
+        assert!(crossings(&x, &tris, &edges) >= 2);
+        let lifted: Vec<[f64; 3]> = x
+            .iter()
+            .enumerate()
+            .map(|(i, p)| if i >= 4 { [p[0], p[1], p[2] + 1.0] } else { *p })
+            .collect();
+        assert_eq!(crossings(&lifted, &tris, &edges), 0);
+        let t = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        assert!(segment_crosses_triangle(
+            [0.2, 0.2, -1.0],
+            [0.2, 0.2, 1.0],
+            t[0],
+            t[1],
+            t[2]
+        ));
+        assert!(!segment_crosses_triangle(
+            [0.2, 0.2, 0.1],
+            [0.2, 0.2, 1.0],
+            t[0],
+            t[1],
+            t[2]
+        ));
+        assert!(!segment_crosses_triangle(
+            [0.8, 0.8, -1.0],
+            [0.8, 0.8, 1.0],
+            t[0],
+            t[1],
+            t[2]
+        ));
     }
 }

@@ -18,7 +18,9 @@ use crate::solver::newton::{
     self, Evaluation, NewtonError, NewtonReport, NewtonSettings, NewtonSystem, NewtonWorkspace,
 };
 use potential::{IncrementalPotential, StepContext, StepTerm};
-use terms::{BendingTerm, FrictionTerm, InertiaTerm, LoadTerm, MembraneTerm, PenaltyTerm};
+use terms::{
+    BendingTerm, FrictionTerm, InertiaTerm, LoadTerm, MembraneTerm, PenaltyTerm, SelfContactTerm,
+};
 
 /// The state carried from step to step.
 #[derive(Debug, Clone, PartialEq)]
@@ -277,6 +279,12 @@ fn step_potential<'a>(
                 state,
             )));
         }
+    }
+    if let Some(self_contact) = model.self_contact() {
+        list.push(Box::new(SelfContactTerm::new(
+            self_contact,
+            model.pattern(),
+        )));
     }
     IncrementalPotential::new(list)
 }

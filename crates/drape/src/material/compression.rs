@@ -207,7 +207,10 @@ mod tests {
         let wrinkled = [0.03, -0.02, 0.0];
         assert_eq!(m.wrinkle_state(wrinkled), Some(WrinkleState::Wrinkled));
         let d = m.tangent(wrinkled);
-        assert!((d[1][1] - r * svk.matrix()[1][1]).abs() <= 1e-9 * Y, "{d:?}");
+        assert!(
+            (d[1][1] - r * svk.matrix()[1][1]).abs() <= 1e-9 * Y,
+            "{d:?}"
+        );
         let one = isotropic(1.0);
         for e in SAMPLES {
             assert_eq!(one.evaluate(e), svk.evaluate(e));

@@ -15,6 +15,7 @@ pub use mass::MassKind;
 
 use crate::bending::{Bending, BendingRigidity};
 use crate::contact::ContactModel;
+use crate::contact::self_contact::SelfContact;
 use crate::element::ElementGeometry;
 use crate::element::membrane::Section;
 use crate::load::pressure::PressureQuadrature;
@@ -83,6 +84,8 @@ pub struct Model {
     contact: Option<ContactModel>,
     /// Bending stiffness, if any, attached to `pattern`.
     bending: Option<Bending>,
+    /// Self-contact, if any.
+    self_contact: Option<SelfContact>,
 }
 
 /// The parts of a [`Model`] ([`Model::builder`]), built into it at once by
@@ -102,6 +105,7 @@ pub struct ModelBuilder {
     contact: Option<ContactModel>,
     bending: Option<BendingRigidity>,
     clamped: Vec<bool>,
+    self_contact: Option<(f64, f64)>,
 }
 
 impl ModelBuilder {
@@ -139,6 +143,13 @@ impl ModelBuilder {
         self
     }
 
+    /// Self-contact with distance `d̂` and penalty `eta` (N/m), if any
+    /// ([`crate::contact::self_contact`]): on the mesh's (sub-)triangles.
+    pub fn self_contact(mut self, spec: Option<(f64, f64)>) -> Self {
+        self.self_contact = spec;
+        self
+    }
+
     /// Clamps (`[[fix]] clamp = true`): `clamped[a]` marks node `a`, held
     /// in all three components, whose slope the bending patches hold too
     /// ([`crate::bending`]; missing entries are not clamped). Nothing
@@ -164,8 +175,18 @@ impl ModelBuilder {
             contact,
             bending,
             clamped,
+            self_contact,
         } = self;
         mesh.validate()?;
+        let self_contact = match self_contact {
+            Some((distance, eta)) => Some(SelfContact::new(
+                crate::bending::triangulate(&mesh).0,
+                &mesh.nodes.concat(),
+                distance,
+                eta,
+            )?),
+            None => None,
+        };
         let p = mesh.order.degree();
         let geometry = ElementGeometry::with_axis(
             &mesh,
@@ -212,6 +233,7 @@ impl ModelBuilder {
             pressure_quadrature,
             contact,
             bending,
+            self_contact,
         })
     }
 }
@@ -293,6 +315,9 @@ pub enum ModelError {
     /// The material's axis (the warp) is normal to an element.
     #[error(transparent)]
     Axis(#[from] crate::element::geometry::AxisError),
+    /// Self-contact's distance is larger than the initial mesh allows.
+    #[error(transparent)]
+    SelfContact(#[from] crate::contact::self_contact::TooClose),
     /// A lumped mass came out non-positive at a node.
     #[error("the lumped mass of node {node} is {mass:e} kg (not positive)")]
     NonPositiveMass {
@@ -423,6 +448,7 @@ impl Model {
             contact: None,
             bending: None,
             clamped: Vec::new(),
+            self_contact: None,
         }
     }
 
@@ -479,6 +505,11 @@ impl Model {
     }
 
     /// Bending stiffness, if any, attached to [`Model::pattern`].
+    pub fn self_contact(&self) -> Option<&SelfContact> {
+        self.self_contact.as_ref()
+    }
+
+    /// Bending stiffness, if any.
     pub fn bending(&self) -> Option<&Bending> {
         self.bending.as_ref()
     }

@@ -2,7 +2,7 @@
 
 use super::analysis::build_analysis;
 use super::check::Checker;
-use super::contact::{build_contact, check_initial_penetration};
+use super::contact::{build_contact, build_self_contact, check_initial_penetration};
 use super::material::{build_bending, build_material};
 use super::{
     AnalysisKind, BoxSpec, Component, FixSpec, LoadKindSpec, LoadSpec, MeshShape, MeshSpec,
@@ -50,6 +50,7 @@ impl Scenario {
             build_fix(&c, &mesh, i, f, (&mut fixed, &mut clamped))?;
         }
         let contact = build_contact(&c, self, &base, &mut inputs)?;
+        let self_contact = build_self_contact(&c, self)?;
         let (analysis, adaptive, rest) = build_analysis(&c, self)?;
         let mut newton = build_newton(&c, &self.solver)?;
         newton.projection = newton.projection.resolve(bending.is_some());
@@ -67,8 +68,12 @@ impl Scenario {
             .mass(self.analysis.mass)
             .contact(contact)
             .bending(bending)
+            .self_contact(self_contact)
             .build()
             .map_err(|e| match e {
+                ModelError::SelfContact(e) => {
+                    c.invalid("contact", None, "self_distance", e.to_string())
+                }
                 ModelError::Axis(e) | ModelError::Bending(BendingError::Axis(e)) => {
                     c.invalid("material", None, "warp_direction", e.to_string())
                 }

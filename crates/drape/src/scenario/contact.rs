@@ -46,6 +46,14 @@ pub struct PenaltySpec {
     /// resistance: the creep of a fabric that sticks. Default 1e-3.
     #[serde(default = "default_stick_speed")]
     pub stick_speed: f64,
+    /// Self-contact (SPEC §6.3): the fabric against itself, within and
+    /// between its pieces. Default false.
+    #[serde(default, rename = "self")]
+    pub self_contact: bool,
+    /// How close two pieces of fabric may come (m), > 0; default the
+    /// thickness. Only with `self = true`.
+    #[serde(default)]
+    pub self_distance: Option<f64>,
 }
 
 fn default_stick_speed() -> f64 {
@@ -65,9 +73,33 @@ pub struct LagrangeSpec {
     /// resistance, as with a penalty. Default 1e-3.
     #[serde(default = "default_stick_speed")]
     pub stick_speed: f64,
+    /// Self-contact (SPEC §6.3): the fabric against itself, within and
+    /// between its pieces. Default false.
+    #[serde(default, rename = "self")]
+    pub self_contact: bool,
+    /// How close two pieces of fabric may come (m), > 0; default the
+    /// thickness. Only with `self = true`.
+    #[serde(default)]
+    pub self_distance: Option<f64>,
 }
 
 impl ContactSpec {
+    /// `self = true`.
+    pub fn self_contact(&self) -> bool {
+        match self {
+            Self::Penalty(p) => p.self_contact,
+            Self::Lagrange(l) => l.self_contact,
+        }
+    }
+
+    /// `self_distance`.
+    fn self_distance(&self) -> Option<f64> {
+        match self {
+            Self::Penalty(p) => p.self_distance,
+            Self::Lagrange(l) => l.self_distance,
+        }
+    }
+
     /// The keys of the contact table but `method`, into the struct of `method`.
     pub(super) fn read(
         method: ContactMethodName,
@@ -89,7 +121,7 @@ pub(super) fn build_contact(
     inputs: &mut Vec<InputFile>,
 ) -> Result<Option<ContactModel>, ScenarioError> {
     if s.obstacles.is_empty() {
-        if s.contact.is_some() {
+        if s.contact.is_some() && !s.contact.as_ref().is_some_and(ContactSpec::self_contact) {
             return Err(c.invalid(
                 "contact",
                 None,
@@ -201,4 +233,38 @@ pub(super) fn check_initial_penetration(
         }
     }
     Ok(())
+}
+
+/// `[contact] self` and `self_distance`: `Some((d̂, eta))` with self-contact
+/// (its distance, by default the thickness, and the penalty its stiffness
+/// derives from: `[contact] penalty`, or
+/// [`crate::contact::self_contact::DEFAULT_STIFFNESS`]).
+pub(super) fn build_self_contact(
+    c: &Checker,
+    s: &Scenario,
+) -> Result<Option<(f64, f64)>, ScenarioError> {
+    let t = "contact";
+    let Some(spec) = &s.contact else {
+        return Ok(None);
+    };
+    if !spec.self_contact() {
+        if let Some(d) = spec.self_distance() {
+            return Err(c.invalid(
+                t,
+                None,
+                "self_distance",
+                format!("= {d} is given but self-contact is off (set self = true, or remove it)"),
+            ));
+        }
+        return Ok(None);
+    }
+    let distance = match spec.self_distance() {
+        Some(d) => c.positive(t, None, "self_distance", d)?,
+        None => s.material.thickness,
+    };
+    let eta = match spec {
+        ContactSpec::Penalty(p) => p.penalty,
+        ContactSpec::Lagrange(_) => crate::contact::self_contact::DEFAULT_STIFFNESS,
+    };
+    Ok(Some((distance, eta)))
 }

@@ -119,7 +119,10 @@ pub(super) fn build_material(
         }
         (Elastic::Orthotropic(o), None) => (o, m.prestress),
         (Elastic::Orthotropic(o), Some(model)) => {
-            let w = (*o).clone().with_wrinkling(model, m.prestress).with_slack_tangent(slack);
+            let w = (*o)
+                .clone()
+                .with_wrinkling(model, m.prestress)
+                .with_slack_tangent(slack);
             let material: Box<dyn Material> = match ratio {
                 Some(r) if r > 0.0 => Box::new(CompressionSoft::new(o, Box::new(w), r)),
                 _ => Box::new(w),
@@ -158,7 +161,9 @@ fn compression_ratio(c: &Checker, m: &MaterialSpec) -> Result<Option<f64>, Scena
             t,
             None,
             "compression_ratio",
-            format!("must lie in [0, 1] (0: no compressive stiffness, 1: the elastic material), not {r}"),
+            format!(
+                "must lie in [0, 1] (0: no compressive stiffness, 1: the elastic material), not {r}"
+            ),
         ));
     }
     Ok(Some(r))

@@ -169,6 +169,8 @@ mod tests {
                 penalty: 5.0,
                 friction: 0.0,
                 stick_speed: crate::contact::DEFAULT_STICK_SPEED,
+                self_contact: false,
+                self_distance: None,
             }))
         );
     }

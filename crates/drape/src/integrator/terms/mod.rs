@@ -10,6 +10,7 @@ mod inertia;
 mod loads;
 mod membrane;
 mod penalty;
+mod self_contact;
 
 pub use bending::BendingTerm;
 pub use friction::FrictionTerm;
@@ -17,6 +18,7 @@ pub use inertia::InertiaTerm;
 pub use loads::LoadTerm;
 pub use membrane::MembraneTerm;
 pub use penalty::PenaltyTerm;
+pub use self_contact::SelfContactTerm;
 
 #[cfg(test)]
 pub(crate) use check::{
