@@ -16,15 +16,14 @@
 //!
 //! **Hessian.** Each pair's 12 x 12 Hessian is projected to its positive
 //! semi-definite part ([`crate::psd`]; exact where it already is) and
-//! scattered into the model's pattern. The pattern is the elements' and
-//! the bending stencils', fixed when the model is built; a pair whose
-//! nodes are not coupled there has its off-diagonal block `K_ab` moved to
-//! the diagonal as `|K_ab|_F I` on both nodes, which keeps the sum
+//! scattered into a pattern: the stepper's layout grown with the pairs
+//! that may touch (`integrator::grown`, [`SelfContact::stencils_near`],
+//! [`SelfContact::add_hessian`]), or the model's own. A pair whose nodes
+//! are not coupled in the pattern has its off-diagonal block `K_ab` moved
+//! to the diagonal as `|K_ab|_F I` on both nodes, which keeps the sum
 //! positive semi-definite (`[[s I, -K], [-Kᵀ, s I]] ⪰ 0` for `s >= |K|_2`)
-//! but makes Newton's Hessian an approximation where plies touch:
-//! convergence there is linear rather than quadratic. Growing the pattern
-//! with the pairs (the seam's Hessian layout owned by the stepper) is
-//! the next step of issue 33.
+//! but makes Newton's Hessian an approximation there: convergence is then
+//! linear rather than quadratic.
 //!
 //! **The step never crosses.** [`SelfContact::max_step`] is the largest
 //! fraction of a Newton increment that additive CCD allows over the pairs
@@ -193,10 +192,48 @@ impl SelfContact {
             }
             if let (Some((values, pattern)), Some(mut k)) = (h.as_mut(), hess) {
                 crate::psd::project(&mut k, 12, 12);
-                scatter(&k, &nodes, values, pattern);
+                scatter(&k, &nodes, values, pattern, None);
             }
         }
         value
+    }
+
+    /// Adds the barrier's projected Hessian to the values on `pattern`
+    /// (module docs), leaving out the rows and columns of the degrees of
+    /// freedom `fixed` holds: what the step adds after the supports, on
+    /// the Hessian's layout grown with the pairs
+    /// (`integrator::grown`).
+    pub fn add_hessian(
+        &self,
+        y: &[f64],
+        values: &mut [f64],
+        pattern: &SparsePattern,
+        fixed: &[bool],
+    ) {
+        let x = points(y);
+        let s_hat = self.distance * self.distance;
+        let mut pairs = Vec::new();
+        self.for_close_pairs(&x, |kind, pos, a, b| pairs.push((kind, pos, a, b)));
+        for (kind, pos, a, b) in pairs {
+            let nodes = self.nodes(kind, a, b);
+            if let Some((e, _, Some(mut k))) = pair_barrier(kind, &pos, s_hat, self.kappa, true)
+                && e.is_finite()
+            {
+                crate::psd::project(&mut k, 12, 12);
+                scatter(&k, &nodes, values, pattern, Some(fixed));
+            }
+        }
+    }
+
+    /// The four-node stencils of every pair whose boxes, grown by
+    /// `distance`, overlap at `y` (the broad phase, a superset of the pairs
+    /// closer than `distance`): the couplings a Hessian layout makes room
+    /// for.
+    pub fn stencils_near(&self, y: &[f64], distance: f64) -> Vec<[usize; 4]> {
+        let c = candidates(&points(y), &self.triangles, &self.edges, distance);
+        let pt = (c.point_triangle.iter()).map(|&(p, t)| self.nodes(PairKind::PointTriangle, p, t));
+        let ee = (c.edge_edge.iter()).map(|&(e, k)| self.nodes(PairKind::EdgeEdge, e, k));
+        pt.chain(ee).collect()
     }
 
     /// The largest fraction in `(0, 1]` of `dy` from `y` that keeps every
@@ -242,34 +279,40 @@ fn points(y: &[f64]) -> Vec<[f64; 3]> {
 
 /// Adds the 12 x 12 `k` of `nodes` into `values` on `pattern`; a block
 /// the pattern lacks goes to the two diagonal blocks as `|K_ab|_F I`
-/// (module docs).
-fn scatter(k: &[f64; 144], nodes: &[usize; 4], values: &mut [f64], pattern: &SparsePattern) {
+/// (module docs). With `fixed`, the rows and columns of held degrees of
+/// freedom are left out.
+fn scatter(
+    k: &[f64; 144],
+    nodes: &[usize; 4],
+    values: &mut [f64],
+    pattern: &SparsePattern,
+    fixed: Option<&[bool]>,
+) {
+    let free = |d: usize| fixed.is_none_or(|f| !f[d]);
     for (i, &a) in nodes.iter().enumerate() {
         for (j, &b) in nodes.iter().enumerate() {
             let block = |r: usize, c: usize| k[(3 * i + r) * 12 + 3 * j + c];
-            if a != b
-                && let Some(pos) = pattern.node_block(a, b)
-            {
-                for r in 0..3 {
-                    for c in 0..3 {
-                        values[pattern.entry(pos, b, r, c)] += block(r, c);
-                    }
-                }
-            } else if a != b {
-                let f = (0..9)
-                    .map(|m| block(m / 3, m % 3).powi(2))
-                    .sum::<f64>()
-                    .sqrt();
-                for node in [a, b] {
+            match pattern.node_block(a, b) {
+                Some(pos) => {
                     for r in 0..3 {
-                        values[pattern.diagonal_of(3 * node + r)] += 0.5 * f;
+                        for c in 0..3 {
+                            if free(3 * a + r) && free(3 * b + c) {
+                                values[pattern.entry(pos, b, r, c)] += block(r, c);
+                            }
+                        }
                     }
                 }
-            } else {
-                let pos = pattern.node_block(a, a).expect("diagonal block");
-                for r in 0..3 {
-                    for c in 0..3 {
-                        values[pattern.entry(pos, a, r, c)] += block(r, c);
+                None => {
+                    let f = (0..9)
+                        .map(|m| block(m / 3, m % 3).powi(2))
+                        .sum::<f64>()
+                        .sqrt();
+                    for node in [a, b] {
+                        for r in 0..3 {
+                            if free(3 * node + r) {
+                                values[pattern.diagonal_of(3 * node + r)] += 0.5 * f;
+                            }
+                        }
                     }
                 }
             }

@@ -2,6 +2,7 @@
 //! (static), each step solved by Newton–Raphson (docs/theory.md §1.6–1.7), with the
 //! contact active-set loop for Lagrange multipliers (docs/theory.md §1.8).
 
+mod grown;
 pub mod newmark;
 pub mod potential;
 pub mod statics;
@@ -101,6 +102,9 @@ pub(crate) struct StepSystem<'a> {
     /// tangent and the pressure's are not a potential's Hessian, and
     /// projecting the bending beside them would only spoil the tangent).
     pub can_project: bool,
+    /// The Hessian's layout grown with self-contact's pairs, when the step
+    /// uses one ([`grown`]): Newton's Hessian is on its pattern.
+    pub grown: Option<&'a mut grown::Grown>,
 }
 
 impl NewtonSystem for StepSystem<'_> {
@@ -112,6 +116,31 @@ impl NewtonSystem for StepSystem<'_> {
             contact: self.contact.as_deref(),
             project: (self.projecting && self.can_project).then_some(&self.project[..]),
         };
+        if let (Some(grown), Some(h)) = (self.grown.as_deref_mut(), h.as_deref_mut()) {
+            // Assembled on the model's pattern, supported there, copied
+            // into the grown layout, the pairs' couplings added on it.
+            let value = self
+                .potential
+                .evaluate(&ctx, y, g, Some(&mut grown.model_values));
+            self.strain_energy = self.potential.value("membrane").map_or(0.0, |v| v.value);
+            self.bending_energy = self.potential.value("bending").map_or(0.0, |v| v.value);
+            model.apply_supports(g, Some(&mut grown.model_values));
+            h.fill(0.0);
+            for (k, &v) in grown.model_values.iter().enumerate() {
+                h[grown.map[k]] = v;
+            }
+            if let Some(sc) = model.self_contact() {
+                sc.add_hessian(y, h, &grown.pattern, model.fixed());
+            }
+            let symmetric = model.symmetric_by_construction()
+                || model.pattern().is_symmetric(&grown.model_values, 1e-10);
+            return Evaluation {
+                scale: value.scale,
+                symmetric,
+                energy: value.energy,
+                merit: None,
+            };
+        }
         let value = self.potential.evaluate(&ctx, y, g, h.as_deref_mut());
         self.strain_energy = self.potential.value("membrane").map_or(0.0, |v| v.value);
         self.bending_energy = self.potential.value("bending").map_or(0.0, |v| v.value);
@@ -244,6 +273,7 @@ fn step_potential<'a>(
     state: Option<&ContactState>,
     f_ext: &'a mut [f64],
     my: &'a mut [f64],
+    grown: bool,
 ) -> IncrementalPotential<'a> {
     let mut list: Vec<Box<dyn StepTerm + 'a>> = vec![Box::new(MembraneTerm::new(model))];
     if let Some(bending) = model.bending() {
@@ -281,9 +311,11 @@ fn step_potential<'a>(
         }
     }
     if let Some(self_contact) = model.self_contact() {
+        // On a grown layout the step adds the pairs' Hessians itself.
         list.push(Box::new(SelfContactTerm::new(
             self_contact,
             model.pattern(),
+            !grown,
         )));
     }
     IncrementalPotential::new(list)
@@ -308,8 +340,12 @@ pub(crate) fn solve_step(
     f_ext: &mut [f64],
     old_ext: &[f64],
     my: &mut [f64],
+    grown: &mut Option<grown::Grown>,
 ) -> Result<(NewtonReport, StepEnergies), NewtonError> {
     let saved = contact.clone();
+    if grown::applies(model, ws.linear.effective_mode()) {
+        grown::grow(model, grown, ws, y, terms.start.map(|s| s.0))?;
+    }
     let mut total: Option<NewtonReport> = None;
     let mut rounds = 0;
     // Multipliers: the first guess's penetrating nodes join the active set
@@ -332,7 +368,14 @@ pub(crate) fn solve_step(
     let error = loop {
         // Every round starts the terms anew (a term that lags does so
         // from the step's start, each round alike).
-        let mut potential = step_potential(model, &terms, saved.as_ref(), &mut *f_ext, &mut *my);
+        let mut potential = step_potential(
+            model,
+            &terms,
+            saved.as_ref(),
+            &mut *f_ext,
+            &mut *my,
+            grown.is_some(),
+        );
         let ctx = StepContext {
             time: terms.time,
             contact: contact.as_ref(),
@@ -352,6 +395,7 @@ pub(crate) fn solve_step(
             project: Vec::new(),
             projecting: false,
             can_project,
+            grown: grown.as_mut(),
         };
         let result = newton::solve(&mut system, y, length, settings, ws);
         let strain = StepEnergies {

@@ -66,9 +66,18 @@ pub struct DynamicWorkspace {
     pub(crate) y: Vec<f64>,
     /// Newton buffers and the linear solver.
     pub newton: NewtonWorkspace,
+    /// The Hessian's layout grown with self-contact's pairs, once a step
+    /// has needed it (`integrator::grown`).
+    pub(crate) grown: Option<super::grown::Grown>,
 }
 
 impl DynamicWorkspace {
+    /// How many times the Hessian's layout was grown with self-contact's
+    /// pairs (`integrator::grown`; 0 without self-contact).
+    pub fn layout_builds(&self) -> usize {
+        self.grown.as_ref().map_or(0, |g| g.builds)
+    }
+
     /// Buffers for `model`, with direct linear solves.
     pub fn new(model: &Model) -> Result<Self, crate::solver::LinearSolveError> {
         Self::with_mode(model, crate::solver::LinearMode::Direct)
@@ -97,6 +106,7 @@ impl DynamicWorkspace {
             old_ext: vec![0.0; n],
             y: vec![0.0; n],
             newton: NewtonWorkspace::new(n, model.pattern().nnz(), linear),
+            grown: None,
         })
     }
 }
@@ -186,6 +196,7 @@ impl Newmark {
             &mut ws.f_ext,
             &ws.old_ext,
             &mut ws.my,
+            &mut ws.grown,
         )?;
         let (y, old_ext) = (&ws.y, &ws.old_ext);
         let mut work = 0.0;

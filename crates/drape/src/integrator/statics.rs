@@ -57,6 +57,7 @@ impl StaticStepper {
             &mut ws.f_ext,
             &ws.old_ext,
             &mut ws.my,
+            &mut ws.grown,
         )?;
         let mut work = 0.0;
         for i in 0..ws.y.len() {

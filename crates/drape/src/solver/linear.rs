@@ -319,6 +319,11 @@ impl LinearSolver {
         })
     }
 
+    /// How systems are solved.
+    pub fn mode(&self) -> LinearMode {
+        self.mode
+    }
+
     /// Chooses how systems are solved (default [`LinearMode::Direct`]).
     pub fn with_mode(mut self, mode: LinearMode) -> Self {
         self.mode = mode;
@@ -440,6 +445,15 @@ impl LinearSolver {
 
     /// The cascade up to LU, cheapest path first: the path that solved
     /// the system, its solution in `self.rhs`, or `None`.
+    /// The mode solves take: `auto` made definite by the system's size.
+    pub fn effective_mode(&self) -> LinearMode {
+        match self.mode {
+            LinearMode::Auto if self.dimension() > AUTO_ITERATIVE_ABOVE => LinearMode::Reuse,
+            LinearMode::Auto => LinearMode::Direct,
+            m => m,
+        }
+    }
+
     fn solve_before_lu(
         &mut self,
         values: &[f64],
@@ -447,11 +461,7 @@ impl LinearSolver {
         rhs: &[f64],
     ) -> Result<Option<Factorization>, SolveFailure> {
         let n = self.dimension();
-        let mode = match self.mode {
-            LinearMode::Auto if n > AUTO_ITERATIVE_ABOVE => LinearMode::Reuse,
-            LinearMode::Auto => LinearMode::Direct,
-            m => m,
-        };
+        let mode = self.effective_mode();
         // (A block LU of an earlier Hessian as GMRES preconditioner does
         // not pay on the pedestal: the wrinkling tangent changes too much
         // from one iteration to the next; docs/performance.md.)

@@ -322,6 +322,16 @@ impl NewtonWorkspace {
         (&mut self.h, &mut self.linear)
     }
 
+    /// Binds the workspace to another pattern: `linear` solves on it and
+    /// the Hessian buffer gets its `nnz` entries (the stepper's layout
+    /// grown with self-contact's pairs, `integrator::grown`).
+    pub fn rebind(&mut self, linear: LinearSolver, nnz: usize) {
+        self.linear = linear;
+        self.h = vec![0.0; nnz];
+        self.diagonal.clear();
+        self.unshifted.clear();
+    }
+
     /// Buffers for `n` unknowns and `nnz` Hessian entries on `linear`'s pattern.
     pub fn new(n: usize, nnz: usize, linear: LinearSolver) -> Self {
         Self {

@@ -14,12 +14,19 @@ use crate::solver::SparsePattern;
 pub struct SelfContactTerm<'a> {
     contact: &'a SelfContact,
     pattern: &'a SparsePattern,
+    hessian: bool,
 }
 
 impl<'a> SelfContactTerm<'a> {
-    /// The barrier of `contact`, its Hessian added on `pattern`.
-    pub fn new(contact: &'a SelfContact, pattern: &'a SparsePattern) -> Self {
-        Self { contact, pattern }
+    /// The barrier of `contact`, its Hessian added on `pattern` if
+    /// `hessian` (else the step adds it on its grown layout,
+    /// `integrator::grown`).
+    pub fn new(contact: &'a SelfContact, pattern: &'a SparsePattern, hessian: bool) -> Self {
+        Self {
+            contact,
+            pattern,
+            hessian,
+        }
     }
 }
 
@@ -41,6 +48,7 @@ impl StepTerm for SelfContactTerm<'_> {
         g: &mut [f64],
         h: Option<&mut [f64]>,
     ) -> TermValue {
+        let h = h.filter(|_| self.hessian);
         let value = self.contact.add(y, g, h.map(|v| (v, self.pattern)));
         TermValue {
             value,
@@ -111,7 +119,7 @@ mod tests {
             })
             .collect();
         assert!(contact.active_pairs(&y) > 4);
-        let mut term = SelfContactTerm::new(&contact, &pattern);
+        let mut term = SelfContactTerm::new(&contact, &pattern, true);
         let ctx = StepContext {
             time: 0.0,
             contact: None,
@@ -119,13 +127,13 @@ mod tests {
         };
         let energy = |v: &[f64]| {
             let mut g = vec![0.0; v.len()];
-            SelfContactTerm::new(&contact, &pattern)
+            SelfContactTerm::new(&contact, &pattern, true)
                 .add(&ctx, v, &mut g, None)
                 .value
         };
         let grad = |v: &[f64]| {
             let mut g = vec![0.0; v.len()];
-            SelfContactTerm::new(&contact, &pattern).add(&ctx, v, &mut g, None);
+            SelfContactTerm::new(&contact, &pattern, true).add(&ctx, v, &mut g, None);
             g
         };
         assert!(energy(&y) > 0.0);

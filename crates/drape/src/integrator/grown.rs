@@ -1,0 +1,153 @@
+//! The Hessian's layout grown with self-contact's pairs (issue 33,
+//! ARCHITECTURE.md "The Hessian's layout"). The model's pattern — the
+//! elements' and the bending stencils' couplings — is fixed when the model
+//! is built; self-contact couples nodes of folds and plies that meet
+//! anywhere. The stepper owns a second layout, the model's pattern with
+//! the four-node stencils of the pairs that may touch added, and a linear
+//! solver bound to it:
+//!
+//! - **when it grows**: at the start of each step, from the broad phase at
+//!   the step's first guess with the distance `2 d̂ + 2 max |Y - Y_start|`
+//!   (the pairs the step can bring within `d̂`). If every coupling those
+//!   pairs need is in the layout already, nothing happens; otherwise the
+//!   layout is rebuilt with the pairs within [`ROOM`] times that distance
+//!   added to the ones it has (it only grows), and the solver's symbolic
+//!   analysis is done again.
+//! - **how the step writes it**: the terms still assemble on the model's
+//!   pattern (their block positions are computed once), into
+//!   [`Grown::model_values`]; the supports are applied there; then the
+//!   values are copied through [`Grown::map`] into the grown layout, and
+//!   self-contact's pair Hessians are added on it, leaving out the held
+//!   degrees of freedom. A pair that appears within a step without its
+//!   stencil in the layout falls back to the diagonal treatment of
+//!   [`crate::contact::self_contact`].
+//! - **where it is not used**: with Lagrange multipliers (their
+//!   elimination rotates the model's rows) and with a linear mode other
+//!   than `direct` (the kept multigrid hierarchy and `reuse`'s factor are
+//!   made for the model's pattern); those keep the diagonal treatment.
+//!
+//! A resumed run starts with the model's layout and grows it again from
+//! the checkpoint's state, so it need not factorise on the same pattern
+//! as the uninterrupted run: a resumed self-contact run is not promised
+//! to be bit-identical.
+
+use crate::model::Model;
+use crate::solver::newton::NewtonWorkspace;
+use crate::solver::{LinearMode, LinearSolveError, LinearSolver, SparsePattern};
+use std::collections::HashSet;
+
+/// How much farther than the pairs that make the layout grow it takes
+/// pairs in (module docs): the room that makes it grow rarely.
+const ROOM: f64 = 3.0;
+
+/// The grown layout (module docs).
+#[derive(Debug)]
+pub struct Grown {
+    /// The model's pattern with the pairs' stencils.
+    pub(crate) pattern: SparsePattern,
+    /// `map[k]`: where the model pattern's value `k` lies in `pattern`.
+    pub(crate) map: Vec<usize>,
+    /// The Hessian's values on the model's pattern, before the copy.
+    pub(crate) model_values: Vec<f64>,
+    /// The pair stencils in `pattern`.
+    stencils: Vec<[usize; 4]>,
+    /// The node couplings (`a < b`) they add.
+    coupled: HashSet<(usize, usize)>,
+    /// How many times the layout was built.
+    pub builds: usize,
+}
+
+/// Whether a step of `model` solved in `mode` uses a grown layout.
+pub(crate) fn applies(model: &Model, mode: LinearMode) -> bool {
+    model.self_contact().is_some()
+        && mode == LinearMode::Direct
+        && model
+            .contact()
+            .is_none_or(|c| c.method != crate::contact::ContactMethod::Lagrange)
+}
+
+/// The couplings of a four-node stencil, `a < b`.
+fn couplings(s: &[usize; 4]) -> impl Iterator<Item = (usize, usize)> + '_ {
+    (0..4).flat_map(move |i| (i + 1..4).map(move |j| (s[i].min(s[j]), s[i].max(s[j]))))
+}
+
+/// Grows `grown` for a step from `start` to the first guess `y` (module
+/// docs) and rebinds `ws`'s linear solver and Hessian buffer to it when it
+/// changes. Nothing without self-contact.
+pub(crate) fn grow(
+    model: &Model,
+    grown: &mut Option<Grown>,
+    ws: &mut NewtonWorkspace,
+    y: &[f64],
+    start: Option<&[f64]>,
+) -> Result<(), LinearSolveError> {
+    let Some(sc) = model.self_contact() else {
+        return Ok(());
+    };
+    let reach = start.map_or(0.0, |s| {
+        (y.chunks_exact(3).zip(s.chunks_exact(3)))
+            .map(|(a, b)| crate::vec3::norm([a[0] - b[0], a[1] - b[1], a[2] - b[2]]))
+            .fold(0.0f64, f64::max)
+    });
+    let trigger = 2.0 * sc.distance() + 2.0 * reach;
+    let have = grown.as_ref().map(|g| &g.coupled);
+    let missing = |s: &[usize; 4]| have.is_none_or(|c| couplings(s).any(|p| !c.contains(&p)));
+    if grown.is_some() && !sc.stencils_near(y, trigger).iter().any(missing) {
+        return Ok(());
+    }
+    // Room: the pairs within ROOM times the distance that triggered.
+    let new: Vec<[usize; 4]> = (sc.stencils_near(y, ROOM * trigger).into_iter())
+        .filter(|s| missing(s))
+        .collect();
+    let (mut stencils, mut coupled, builds) = match grown.take() {
+        Some(g) => (g.stencils, g.coupled, g.builds),
+        None => (Vec::new(), HashSet::new(), 0),
+    };
+    for s in new {
+        coupled.extend(couplings(&s));
+        stencils.push(s);
+    }
+    let base = model.pattern();
+    let mesh = model.mesh();
+    let pattern = match model.bending() {
+        Some(b) => SparsePattern::new(
+            mesh.node_count(),
+            (mesh.elements().chain(b.stencils())).chain(stencils.iter().map(|s| s.as_slice())),
+        ),
+        None => SparsePattern::new(
+            mesh.node_count(),
+            mesh.elements().chain(stencils.iter().map(|s| s.as_slice())),
+        ),
+    };
+    let mut map = vec![0; base.nnz()];
+    let (ptr, rows) = base.node_graph();
+    for b in 0..mesh.node_count() {
+        for p in ptr[b]..ptr[b + 1] {
+            let a = rows[p];
+            let q = pattern
+                .node_block(a, b)
+                .expect("the grown pattern holds the model's");
+            for i in 0..3 {
+                for j in 0..3 {
+                    map[base.entry(p, b, i, j)] = pattern.entry(q, b, i, j);
+                }
+            }
+        }
+    }
+    let (node_ptr, node_rows) = pattern.node_graph();
+    let mut linear = LinearSolver::new(&pattern.col_ptr, &pattern.row_idx)?
+        .with_transpose(pattern.transpose_map().to_vec())
+        .with_node_blocks(node_ptr, node_rows)
+        .with_mode(ws.linear.mode());
+    linear.stats = ws.linear.stats;
+    ws.rebind(linear, pattern.nnz());
+    *grown = Some(Grown {
+        pattern,
+        map,
+        model_values: vec![0.0; base.nnz()],
+        stencils,
+        coupled,
+        builds: builds + 1,
+    });
+    Ok(())
+}
