@@ -175,6 +175,9 @@ pub struct Report {
     pub center: [f64; 3],
     /// The frame's file.
     pub frame: String,
+    /// Edges of the fabric passing through its own triangles (0: it never
+    /// crosses itself).
+    pub crossings: usize,
 }
 
 impl Report {
@@ -195,6 +198,7 @@ impl Report {
             vertical: t.plane.vertical(),
             center: t.plane.origin(),
             frame: m.entry.path.display().to_string(),
+            crossings: m.measurement.crossings,
         }
     }
 }

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Keys of the JSON object, in their order (README "Measuring a drape").
-const KEYS: [&str; 13] = [
+const KEYS: [&str; 14] = [
     "step",
     "time",
     "shadow_area",
@@ -25,6 +25,7 @@ const KEYS: [&str; 13] = [
     "vertical",
     "center",
     "frame",
+    "crossings",
 ];
 
 fn drape(args: &[&str]) -> Output {

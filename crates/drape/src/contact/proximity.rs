@@ -224,45 +224,115 @@ pub fn candidates(
     edges: &[[usize; 2]],
     distance: f64,
 ) -> Candidates {
-    let longest = edges
-        .iter()
-        .map(|&[a, b]| {
-            let d = sub(x[a], x[b]);
-            dot(d, d).sqrt()
-        })
-        .fold(0.0f64, f64::max);
+    let longest = longest_edge(x, edges);
     let h = longest.max(distance).max(f64::MIN_POSITIVE);
+    let point_box: Vec<_> = x.iter().map(|&p| (p, p)).collect();
     let tri_box: Vec<_> = (triangles.iter())
         .map(|t| bounds(t.iter().map(|&a| x[a]), distance))
         .collect();
     let edge_box: Vec<_> = (edges.iter())
         .map(|e| bounds(e.iter().map(|&a| x[a]), distance))
         .collect();
-    let mut tri_grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
-    for (k, b) in tri_box.iter().enumerate() {
-        for cell in cells(b, h) {
-            tri_grid.entry(cell).or_default().push(k);
+    pairs_of_boxes(&point_box, &tri_box, &edge_box, triangles, edges, h)
+}
+
+/// The pairs whose boxes swept over a motion — from `x` to `x + dx` —
+/// and grown by `margin` overlap: every pair that comes closer than
+/// `margin` at some point of the straight-line motion is among them (what
+/// continuous collision detection then checks). Each primitive's box
+/// holds it at both ends, so a node that moves far makes its own box
+/// large, not every box.
+pub fn swept_candidates(
+    x: &[[f64; 3]],
+    dx: &[[f64; 3]],
+    triangles: &[[usize; 3]],
+    edges: &[[usize; 2]],
+    margin: f64,
+) -> Candidates {
+    let end: Vec<[f64; 3]> = x.iter().zip(dx).map(|(&p, &d)| add(p, d)).collect();
+    let both = |nodes: &[usize]| bounds(nodes.iter().flat_map(|&a| [x[a], end[a]]), margin);
+    let point_box: Vec<_> = (0..x.len()).map(|p| both(&[p])).collect();
+    let tri_box: Vec<_> = triangles.iter().map(|t| both(t)).collect();
+    let edge_box: Vec<_> = edges.iter().map(|e| both(e)).collect();
+    let extent = |b: &([f64; 3], [f64; 3])| (0..3).map(|i| b.1[i] - b.0[i]).fold(0.0, f64::max);
+    // Cells as large as the typical box (the median edge box), not the
+    // largest: one far-moving node must not coarsen the whole grid.
+    let mut sizes: Vec<f64> = edge_box.iter().map(extent).collect();
+    let h = if sizes.is_empty() {
+        1.0
+    } else {
+        let mid = sizes.len() / 2;
+        *sizes.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
+    pairs_of_boxes(
+        &point_box,
+        &tri_box,
+        &edge_box,
+        triangles,
+        edges,
+        h.max(f64::MIN_POSITIVE),
+    )
+}
+
+/// The longest edge at `x`.
+fn longest_edge(x: &[[f64; 3]], edges: &[[usize; 2]]) -> f64 {
+    edges
+        .iter()
+        .map(|&[a, b]| {
+            let d = sub(x[a], x[b]);
+            dot(d, d).sqrt()
+        })
+        .fold(0.0f64, f64::max)
+}
+
+/// A uniform grid of cells of size `h`, hashed: for each cell, the boxes
+/// that overlap it.
+struct Grid {
+    cells: HashMap<[i64; 3], Vec<usize>>,
+}
+
+impl Grid {
+    fn new(boxes: &[([f64; 3], [f64; 3])], h: f64) -> Self {
+        let mut map: HashMap<[i64; 3], Vec<usize>> = HashMap::with_capacity(boxes.len());
+        for (k, b) in boxes.iter().enumerate() {
+            for c in cells(b, h) {
+                map.entry(c).or_default().push(k);
+            }
         }
+        Self { cells: map }
     }
-    let mut edge_grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
-    for (k, b) in edge_box.iter().enumerate() {
-        for cell in cells(b, h) {
-            edge_grid.entry(cell).or_default().push(k);
-        }
+
+    /// The boxes entered in `cell`.
+    fn get(&self, cell: [i64; 3]) -> impl Iterator<Item = usize> + '_ {
+        self.cells.get(&cell).map_or(&[][..], |v| v).iter().copied()
     }
+}
+
+/// The node–triangle pairs (the node not a vertex) and edge–edge pairs
+/// (sharing no node) whose boxes overlap, by a grid of cells of size `h`.
+fn pairs_of_boxes(
+    point_box: &[([f64; 3], [f64; 3])],
+    tri_box: &[([f64; 3], [f64; 3])],
+    edge_box: &[([f64; 3], [f64; 3])],
+    triangles: &[[usize; 3]],
+    edges: &[[usize; 2]],
+    h: f64,
+) -> Candidates {
+    let tri_grid = Grid::new(tri_box, h);
+    let edge_grid = Grid::new(edge_box, h);
     let mut out = Candidates::default();
-    for (p, &xp) in x.iter().enumerate() {
-        let point = (xp, xp);
-        let cell = xp.map(|v| (v / h).floor() as i64);
-        for &k in tri_grid.get(&cell).map_or(&[][..], |v| v) {
-            if !triangles[k].contains(&p) && overlap(&point, &tri_box[k]) {
-                out.point_triangle.push((p, k));
+    for (p, pb) in point_box.iter().enumerate() {
+        for cell in cells(pb, h) {
+            for k in tri_grid.get(cell) {
+                if !triangles[k].contains(&p) && overlap(pb, &tri_box[k]) {
+                    out.point_triangle.push((p, k));
+                }
             }
         }
     }
     for (k, b) in edge_box.iter().enumerate() {
         for cell in cells(b, h) {
-            for &m in edge_grid.get(&cell).map_or(&[][..], |v| v) {
+            for m in edge_grid.get(cell) {
                 let (e, f) = (edges[k], edges[m]);
                 if m > k && !e.contains(&f[0]) && !e.contains(&f[1]) && overlap(b, &edge_box[m]) {
                     out.edge_edge.push((k, m));
@@ -348,17 +418,12 @@ pub fn crossings(x: &[[f64; 3]], triangles: &[[usize; 3]], edges: &[[usize; 2]])
         .iter()
         .map(|t| bounds(t.iter().map(|&a| x[a]), 0.0))
         .collect();
-    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
-    for (k, b) in tri_box.iter().enumerate() {
-        for cell in cells(b, longest) {
-            grid.entry(cell).or_default().push(k);
-        }
-    }
+    let grid = Grid::new(&tri_box, longest);
     let mut found = Vec::new();
     for (e, &[p, q]) in edges.iter().enumerate() {
         let b = bounds([x[p], x[q]].into_iter(), 0.0);
         for cell in cells(&b, longest) {
-            for &k in grid.get(&cell).map_or(&[][..], |v| v) {
+            for k in grid.get(cell) {
                 let t = triangles[k];
                 if !t.contains(&p)
                     && !t.contains(&q)
@@ -580,6 +645,98 @@ mod tests {
             slow.edge_edge.len()
         );
         assert_eq!(fast, slow);
+    }
+
+    /// Two plies 1 cm apart, the upper moved down through the lower (by
+    /// 2 cm, and one of its nodes 30 cm sideways): every pair whose
+    /// swept boxes overlap by a brute-force test is a swept candidate, and
+    /// every pair that actually meets during the motion (additive CCD on
+    /// every pair stops it before the end) is among them.
+    #[test]
+    fn swept_candidates_hold_every_pair_that_meets() {
+        use crate::contact::barrier::{PairKind, additive_ccd};
+        use crate::mesh::ElementOrder;
+        use crate::mesh::generate::{Pattern, rectangle};
+        let (mut x, mut dx, mut triangles) = (Vec::new(), Vec::new(), Vec::new());
+        for ply in [0.0, 0.01] {
+            let sheet = rectangle(
+                [0.1, 0.1],
+                [8, 8],
+                Pattern::Right,
+                [0.0; 3],
+                ElementOrder::Linear,
+            );
+            let base = x.len();
+            x.extend(sheet.nodes.iter().map(|&[u, v, _]| [u + 3.0 * ply, v, ply]));
+            dx.extend(
+                sheet
+                    .nodes
+                    .iter()
+                    .map(|_| [0.0, 0.0, if ply > 0.0 { -0.02 } else { 0.0 }]),
+            );
+            triangles.extend(
+                sheet
+                    .elements()
+                    .map(|e| [base + e[0], base + e[1], base + e[2]]),
+            );
+        }
+        let far = x.len() - 5;
+        dx[far] = [0.3, 0.0, -0.02];
+        let edges = edges_of(&triangles);
+        let swept = swept_candidates(&x, &dx, &triangles, &edges, 0.0);
+        let sweep =
+            |nodes: &[usize]| bounds(nodes.iter().flat_map(|&a| [x[a], add(x[a], dx[a])]), 0.0);
+        let mut met = 0;
+        for (p, _) in x.iter().enumerate() {
+            for (k, t) in triangles.iter().enumerate() {
+                if t.contains(&p) {
+                    continue;
+                }
+                if overlap(&sweep(&[p]), &sweep(t)) {
+                    assert!(
+                        swept.point_triangle.binary_search(&(p, k)).is_ok(),
+                        "{p} {k}"
+                    );
+                }
+                let n = [p, t[0], t[1], t[2]];
+                if additive_ccd(
+                    PairKind::PointTriangle,
+                    &n.map(|i| x[i]),
+                    &n.map(|i| dx[i]),
+                    0.0,
+                    0.1,
+                    1.0,
+                ) < 1.0
+                {
+                    met += 1;
+                    assert!(
+                        swept.point_triangle.binary_search(&(p, k)).is_ok(),
+                        "{p} {k} meets"
+                    );
+                }
+            }
+        }
+        for (k, e) in edges.iter().enumerate() {
+            for (m, f) in edges.iter().enumerate().skip(k + 1) {
+                if e.contains(&f[0]) || e.contains(&f[1]) {
+                    continue;
+                }
+                let n = [e[0], e[1], f[0], f[1]];
+                if overlap(&sweep(e), &sweep(f))
+                    || additive_ccd(
+                        PairKind::EdgeEdge,
+                        &n.map(|i| x[i]),
+                        &n.map(|i| dx[i]),
+                        0.0,
+                        0.1,
+                        1.0,
+                    ) < 1.0
+                {
+                    assert!(swept.edge_edge.binary_search(&(k, m)).is_ok(), "{k} {m}");
+                }
+            }
+        }
+        assert!(met > 50, "{met}");
     }
 
     /// Two squares of two triangles each, one crossing the other's plane

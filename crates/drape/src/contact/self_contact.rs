@@ -27,15 +27,16 @@
 //!
 //! **The step never crosses.** [`SelfContact::max_step`] is the largest
 //! fraction of a Newton increment that additive CCD allows over the pairs
-//! that may meet (the broad phase grown by twice the largest nodal
-//! displacement): Newton's line search starts below it, and a trial point
+//! that may meet (those whose boxes swept over the increment overlap,
+//! [`super::proximity::swept_candidates`]): Newton's line search starts below it, and a trial point
 //! whose barrier is infinite is rejected, so every accepted iterate keeps
 //! every pair apart.
 
 use super::barrier::{PairKind, additive_ccd, pair_barrier};
-use super::proximity::{candidates, close_pairs, edges_of};
+use super::proximity::{Candidates, candidates, close_pairs, edges_of, swept_candidates};
 use crate::solver::SparsePattern;
 use crate::vec3::norm;
+use std::sync::Mutex;
 
 /// The obstacle penalty self-contact's stiffness derives from when none is
 /// given (N/m; the README's drape tester's).
@@ -46,12 +47,23 @@ const CCD_SCALE: f64 = 0.1;
 
 /// Self-contact's model: the triangles and edges it measures, `d̂` and
 /// `kappa`.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct SelfContact {
     triangles: Vec<[usize; 3]>,
     edges: Vec<[usize; 2]>,
     distance: f64,
     kappa: f64,
+    /// The broad phase kept across evaluations.
+    kept: Mutex<Kept>,
+}
+
+/// The broad phase's pairs at positions `at`: every pair closer than
+/// `margin` there (module docs, "Broad phase").
+#[derive(Debug, Default)]
+struct Kept {
+    at: Vec<[f64; 3]>,
+    margin: f64,
+    pairs: Candidates,
 }
 
 /// The initial mesh already has a pair closer than `d̂`.
@@ -86,6 +98,7 @@ impl SelfContact {
             edges,
             distance,
             kappa: eta / (distance * distance),
+            kept: Mutex::new(Kept::default()),
         };
         let pts = points(x);
         if let Some((d, what)) = s.closest_pair(&pts) {
@@ -133,15 +146,52 @@ impl SelfContact {
         x: &[[f64; 3]],
         mut f: impl FnMut(PairKind, [[f64; 3]; 4], usize, usize),
     ) {
-        let pairs = close_pairs(x, &self.triangles, &self.edges, self.distance);
-        for (p, t) in pairs.point_triangle {
-            let [a, b, c] = self.triangles[t];
-            f(PairKind::PointTriangle, [x[p], x[a], x[b], x[c]], p, t);
+        let d2 = self.distance * self.distance;
+        self.with_candidates(x, 0.0, |pairs| {
+            for &(p, t) in &pairs.point_triangle {
+                let [a, b, c] = self.triangles[t];
+                let pos = [x[p], x[a], x[b], x[c]];
+                if PairKind::PointTriangle.closest(&pos).d2 < d2 {
+                    f(PairKind::PointTriangle, pos, p, t);
+                }
+            }
+            for &(e, k) in &pairs.edge_edge {
+                let ([a, b], [c, d]) = (self.edges[e], self.edges[k]);
+                let pos = [x[a], x[b], x[c], x[d]];
+                if PairKind::EdgeEdge.closest(&pos).d2 < d2 {
+                    f(PairKind::EdgeEdge, pos, e, k);
+                }
+            }
+        });
+    }
+
+    /// Calls `f` with a superset of the pairs that come closer than `d̂`
+    /// at `x` or anywhere within `reach` of it: the kept broad phase when
+    /// no node has moved far enough since it was made to bring a pair in
+    /// from outside it, else a new one made at `x` with room (its margin
+    /// `2 d̂ + 2 reach` more than needed, so that the next evaluations,
+    /// moved by less than `d̂`, reuse it).
+    fn with_candidates<R>(
+        &self,
+        x: &[[f64; 3]],
+        reach: f64,
+        f: impl FnOnce(&Candidates) -> R,
+    ) -> R {
+        let mut kept = self.kept.lock().unwrap_or_else(|e| e.into_inner());
+        let moved = if kept.at.len() == x.len() {
+            (x.iter().zip(&kept.at))
+                .map(|(a, b)| norm(crate::vec3::sub(*a, *b)))
+                .fold(0.0f64, f64::max)
+        } else {
+            f64::INFINITY
+        };
+        if self.distance + 2.0 * (moved + reach) > kept.margin {
+            let margin = 3.0 * self.distance + 2.0 * reach;
+            kept.pairs = candidates(x, &self.triangles, &self.edges, margin);
+            kept.at = x.to_vec();
+            kept.margin = margin;
         }
-        for (e, k) in pairs.edge_edge {
-            let ([a, b], [c, d]) = (self.edges[e], self.edges[k]);
-            f(PairKind::EdgeEdge, [x[a], x[b], x[c], x[d]], e, k);
-        }
+        f(&kept.pairs)
     }
 
     /// The four nodes of pair `(a, b)` of `kind`.
@@ -225,12 +275,10 @@ impl SelfContact {
         }
     }
 
-    /// The four-node stencils of every pair whose boxes, grown by
-    /// `distance`, overlap at `y` (the broad phase, a superset of the pairs
-    /// closer than `distance`): the couplings a Hessian layout makes room
-    /// for.
+    /// The four-node stencils of every pair closer than `distance` at `y`:
+    /// the couplings a Hessian layout makes room for.
     pub fn stencils_near(&self, y: &[f64], distance: f64) -> Vec<[usize; 4]> {
-        let c = candidates(&points(y), &self.triangles, &self.edges, distance);
+        let c = close_pairs(&points(y), &self.triangles, &self.edges, distance);
         let pt = (c.point_triangle.iter()).map(|&(p, t)| self.nodes(PairKind::PointTriangle, p, t));
         let ee = (c.edge_edge.iter()).map(|&(e, k)| self.nodes(PairKind::EdgeEdge, e, k));
         pt.chain(ee).collect()
@@ -244,7 +292,14 @@ impl SelfContact {
         if reach == 0.0 {
             return 1.0;
         }
-        let c = candidates(&x, &self.triangles, &self.edges, 2.0 * reach);
+        // A short increment: the kept broad phase covers its sweep; a long
+        // one: the boxes swept over it (a margin as long would take in far
+        // too many pairs).
+        let c = if reach <= 2.0 * self.distance {
+            self.with_candidates(&x, reach, Candidates::clone)
+        } else {
+            swept_candidates(&x, &p, &self.triangles, &self.edges, 0.0)
+        };
         let mut t = 1.0f64;
         for &(q, k) in &c.point_triangle {
             let n = self.nodes(PairKind::PointTriangle, q, k);

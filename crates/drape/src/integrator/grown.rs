@@ -6,13 +6,14 @@
 //! the four-node stencils of the pairs that may touch added, and a linear
 //! solver bound to it:
 //!
-//! - **when it grows**: at the start of each step, from the broad phase at
-//!   the step's first guess with the distance `2 d̂ + 2 max |Y - Y_start|`
-//!   (the pairs the step can bring within `d̂`). If every coupling those
-//!   pairs need is in the layout already, nothing happens; otherwise the
-//!   layout is rebuilt with the pairs within [`ROOM`] times that distance
-//!   added to the ones it has (it only grows), and the solver's symbolic
-//!   analysis is done again.
+//! - **when it is rebuilt**: at the start of each step, from the broad
+//!   phase at the step's first guess with the distance `2 d̂`. If every
+//!   coupling those pairs need is in the layout already, nothing happens;
+//!   otherwise the layout is rebuilt with the pairs within [`ROOM`] times
+//!   that distance (those near now: it follows the contacts), and the
+//!   solver's symbolic analysis is done again. Pairs that come within `d̂`
+//!   during the step from farther are held by the diagonal treatment
+//!   until the next step's layout takes them in.
 //! - **how the step writes it**: the terms still assemble on the model's
 //!   pattern (their block positions are computed once), into
 //!   [`Grown::model_values`]; the supports are applied there; then the
@@ -36,8 +37,12 @@ use crate::solver::newton::NewtonWorkspace;
 use crate::solver::{LinearMode, LinearSolveError, LinearSolver, SparsePattern};
 use std::collections::HashSet;
 
-/// How much farther than the pairs that make the layout grow it takes
-/// pairs in (module docs): the room that makes it grow rarely.
+/// The pairs whose couplings a step's layout must hold: those within
+/// `TRIGGER d̂` at the step's first guess.
+const TRIGGER: f64 = 2.0;
+
+/// How much farther than [`TRIGGER`] a rebuilt layout takes pairs in
+/// (module docs): the room that makes it rebuild rarely.
 const ROOM: f64 = 3.0;
 
 /// The grown layout (module docs).
@@ -49,8 +54,6 @@ pub struct Grown {
     pub(crate) map: Vec<usize>,
     /// The Hessian's values on the model's pattern, before the copy.
     pub(crate) model_values: Vec<f64>,
-    /// The pair stencils in `pattern`.
-    stencils: Vec<[usize; 4]>,
     /// The node couplings (`a < b`) they add.
     coupled: HashSet<(usize, usize)>,
     /// How many times the layout was built.
@@ -71,42 +74,29 @@ fn couplings(s: &[usize; 4]) -> impl Iterator<Item = (usize, usize)> + '_ {
     (0..4).flat_map(move |i| (i + 1..4).map(move |j| (s[i].min(s[j]), s[i].max(s[j]))))
 }
 
-/// Grows `grown` for a step from `start` to the first guess `y` (module
-/// docs) and rebinds `ws`'s linear solver and Hessian buffer to it when it
-/// changes. Nothing without self-contact.
+/// Makes `grown` hold the couplings a step from the first guess `y` needs
+/// (module docs), rebinding `ws`'s linear solver and Hessian buffer to it
+/// when it is rebuilt. Nothing without self-contact.
 pub(crate) fn grow(
     model: &Model,
     grown: &mut Option<Grown>,
     ws: &mut NewtonWorkspace,
     y: &[f64],
-    start: Option<&[f64]>,
 ) -> Result<(), LinearSolveError> {
     let Some(sc) = model.self_contact() else {
         return Ok(());
     };
-    let reach = start.map_or(0.0, |s| {
-        (y.chunks_exact(3).zip(s.chunks_exact(3)))
-            .map(|(a, b)| crate::vec3::norm([a[0] - b[0], a[1] - b[1], a[2] - b[2]]))
-            .fold(0.0f64, f64::max)
-    });
-    let trigger = 2.0 * sc.distance() + 2.0 * reach;
+    let trigger = TRIGGER * sc.distance();
     let have = grown.as_ref().map(|g| &g.coupled);
     let missing = |s: &[usize; 4]| have.is_none_or(|c| couplings(s).any(|p| !c.contains(&p)));
     if grown.is_some() && !sc.stencils_near(y, trigger).iter().any(missing) {
         return Ok(());
     }
-    // Room: the pairs within ROOM times the distance that triggered.
-    let new: Vec<[usize; 4]> = (sc.stencils_near(y, ROOM * trigger).into_iter())
-        .filter(|s| missing(s))
-        .collect();
-    let (mut stencils, mut coupled, builds) = match grown.take() {
-        Some(g) => (g.stencils, g.coupled, g.builds),
-        None => (Vec::new(), HashSet::new(), 0),
-    };
-    for s in new {
-        coupled.extend(couplings(&s));
-        stencils.push(s);
-    }
+    // Rebuilt from the pairs near now, with room: the layout follows the
+    // contacts (folds and plies that part leave it at the next rebuild).
+    let stencils = sc.stencils_near(y, ROOM * trigger);
+    let coupled: HashSet<(usize, usize)> = stencils.iter().flat_map(couplings).collect();
+    let builds = grown.as_ref().map_or(0, |g| g.builds);
     let base = model.pattern();
     let mesh = model.mesh();
     let pattern = match model.bending() {
@@ -145,7 +135,6 @@ pub(crate) fn grow(
         pattern,
         map,
         model_values: vec![0.0; base.nnz()],
-        stencils,
         coupled,
         builds: builds + 1,
     });

@@ -88,6 +88,9 @@ pub(crate) struct StepSystem<'a> {
     pub strain_energy: f64,
     /// The bending energy at the last evaluation (J; 0 without bending).
     pub bending_energy: f64,
+    /// Self-contact's barrier energy at the last evaluation (J; 0
+    /// without).
+    pub self_contact_energy: f64,
     /// Lagrange: the active nodes at the last evaluation.
     pub active: Vec<ActiveNode>,
     /// The nodes whose stencils' Hessians are projected to their
@@ -124,6 +127,10 @@ impl NewtonSystem for StepSystem<'_> {
                 .evaluate(&ctx, y, g, Some(&mut grown.model_values));
             self.strain_energy = self.potential.value("membrane").map_or(0.0, |v| v.value);
             self.bending_energy = self.potential.value("bending").map_or(0.0, |v| v.value);
+            self.self_contact_energy = self
+                .potential
+                .value("self-contact")
+                .map_or(0.0, |v| v.value);
             model.apply_supports(g, Some(&mut grown.model_values));
             h.fill(0.0);
             for (k, &v) in grown.model_values.iter().enumerate() {
@@ -144,6 +151,10 @@ impl NewtonSystem for StepSystem<'_> {
         let value = self.potential.evaluate(&ctx, y, g, h.as_deref_mut());
         self.strain_energy = self.potential.value("membrane").map_or(0.0, |v| v.value);
         self.bending_energy = self.potential.value("bending").map_or(0.0, |v| v.value);
+        self.self_contact_energy = self
+            .potential
+            .value("self-contact")
+            .map_or(0.0, |v| v.value);
         model.apply_supports(g, h.as_deref_mut());
         let mut merit = None;
         if let (Some(contact), Some(state)) = (model.contact(), self.contact.as_deref())
@@ -236,6 +247,9 @@ pub struct StepEnergies {
     pub bending: f64,
     /// The energy friction dissipated over the step (J; 0 without).
     pub friction: f64,
+    /// Self-contact's barrier energy (J; 0 without): part of
+    /// `history.csv`'s `contact_energy`.
+    pub self_contact: f64,
 }
 
 impl StepEnergies {
@@ -344,7 +358,7 @@ pub(crate) fn solve_step(
 ) -> Result<(NewtonReport, StepEnergies), NewtonError> {
     let saved = contact.clone();
     if grown::applies(model, ws.linear.effective_mode()) {
-        grown::grow(model, grown, ws, y, terms.start.map(|s| s.0))?;
+        grown::grow(model, grown, ws, y)?;
     }
     let mut total: Option<NewtonReport> = None;
     let mut rounds = 0;
@@ -391,6 +405,7 @@ pub(crate) fn solve_step(
             revisions: REVISIONS_IN_NEWTON,
             strain_energy: 0.0,
             bending_energy: 0.0,
+            self_contact_energy: 0.0,
             active: Vec::new(),
             project: Vec::new(),
             projecting: false,
@@ -401,6 +416,7 @@ pub(crate) fn solve_step(
         let strain = StepEnergies {
             membrane: system.strain_energy,
             bending: system.bending_energy,
+            self_contact: system.self_contact_energy,
             friction: system.potential.dissipation(),
         };
         let active = std::mem::take(&mut system.active);

@@ -164,6 +164,11 @@ pub struct Measurement {
     pub folds: usize,
     /// Sub-triangles per element edge the shadow was computed with.
     pub subdivisions: usize,
+    /// Edges passing through a triangle they share no node with: the
+    /// fabric crossing itself (0 for a fabric that never does;
+    /// [`crate::contact::proximity::crossings`], on the elements' linear
+    /// sub-triangles).
+    pub crossings: usize,
 }
 
 /// The drape coefficient `DC = (A − π r_p²) / (π R² − π r_p²)` of a shadow
@@ -201,7 +206,21 @@ pub fn measure(surface: &Surface, tester: &DrapeTester) -> Result<Measurement, M
         ),
         folds: count_folds(&profile),
         subdivisions: s.subdivisions,
+        crossings: crossings_of(surface),
     })
+}
+
+/// The crossings of `surface` (its elements cut into their linear
+/// sub-triangles, as bending cuts them).
+fn crossings_of(surface: &Surface) -> usize {
+    use crate::contact::proximity::{crossings, edges_of};
+    let mesh = crate::mesh::Mesh {
+        nodes: surface.positions.to_vec(),
+        order: surface.order,
+        connectivity: surface.connectivity.to_vec(),
+    };
+    let (triangles, _) = crate::bending::triangulate(&mesh);
+    crossings(surface.positions, &triangles, &edges_of(&triangles))
 }
 
 /// A measurement that cannot be made.

@@ -276,6 +276,9 @@ pub(super) fn fresh<'a>(
         membrane: model.strain_energy(&state.positions),
         bending: model.bending().map_or(0.0, |b| b.energy(&state.positions)),
         friction: 0.0,
+        // No pair is closer than d̂ in the initial mesh (checked when the
+        // model is built).
+        self_contact: 0.0,
     };
     let (stretch0, fractions0) = model.stretch_and_states(&state.positions);
     let contact0 = contact_report(model, &state);
