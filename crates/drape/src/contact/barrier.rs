@@ -226,6 +226,32 @@ pub fn pair_barrier(
     Some((kappa * b, grad, hess))
 }
 
+/// The distance between the boxes of the pair's two primitives (0 where
+/// they overlap): a lower bound on the pair's distance.
+pub fn box_separation(kind: PairKind, x: &[[f64; 3]; 4]) -> f64 {
+    let split = match kind {
+        PairKind::PointTriangle => 1,
+        PairKind::EdgeEdge => 2,
+    };
+    let (a, b) = x.split_at(split);
+    let mut d2 = 0.0;
+    for i in 0..3 {
+        let (alo, ahi) = a
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                (l.min(p[i]), h.max(p[i]))
+            });
+        let (blo, bhi) = b
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                (l.min(p[i]), h.max(p[i]))
+            });
+        let gap = (blo - ahi).max(alo - bhi).max(0.0);
+        d2 += gap * gap;
+    }
+    d2.sqrt()
+}
+
 /// The distance function ACCD measures, `(d^2 - ξ^2) / (d + ξ) = d - ξ`.
 fn gap(kind: PairKind, x: &[[f64; 3]; 4], xi: f64) -> f64 {
     kind.closest(x).d2.sqrt() - xi
@@ -253,6 +279,12 @@ pub fn additive_ccd(
         PairKind::EdgeEdge => len[0].max(len[1]) + len[2].max(len[3]),
     };
     if lp <= 0.0 {
+        return t_max;
+    }
+    // The primitives' boxes bound their distance from below: a pair whose
+    // boxes are farther apart than `ξ + lp t_max` cannot close its gap
+    // within the step (the common case, without a distance computed).
+    if box_separation(kind, x) > xi + lp * t_max {
         return t_max;
     }
     let mut y = *x;

@@ -32,7 +32,7 @@
 //! whose barrier is infinite is rejected, so every accepted iterate keeps
 //! every pair apart.
 
-use super::barrier::{PairKind, additive_ccd, pair_barrier};
+use super::barrier::{PairKind, additive_ccd, box_separation, pair_barrier};
 use super::proximity::{Candidates, candidates, close_pairs, edges_of, swept_candidates};
 use crate::solver::SparsePattern;
 use crate::vec3::norm;
@@ -151,14 +151,18 @@ impl SelfContact {
             for &(p, t) in &pairs.point_triangle {
                 let [a, b, c] = self.triangles[t];
                 let pos = [x[p], x[a], x[b], x[c]];
-                if PairKind::PointTriangle.closest(&pos).d2 < d2 {
+                if box_separation(PairKind::PointTriangle, &pos) < self.distance
+                    && PairKind::PointTriangle.closest(&pos).d2 < d2
+                {
                     f(PairKind::PointTriangle, pos, p, t);
                 }
             }
             for &(e, k) in &pairs.edge_edge {
                 let ([a, b], [c, d]) = (self.edges[e], self.edges[k]);
                 let pos = [x[a], x[b], x[c], x[d]];
-                if PairKind::EdgeEdge.closest(&pos).d2 < d2 {
+                if box_separation(PairKind::EdgeEdge, &pos) < self.distance
+                    && PairKind::EdgeEdge.closest(&pos).d2 < d2
+                {
                     f(PairKind::EdgeEdge, pos, e, k);
                 }
             }

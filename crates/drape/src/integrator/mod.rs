@@ -357,6 +357,7 @@ pub(crate) fn solve_step(
     grown: &mut Option<grown::Grown>,
 ) -> Result<(NewtonReport, StepEnergies), NewtonError> {
     let saved = contact.clone();
+    feasible_guess(model, y, terms.start.map(|s| s.0));
     if grown::applies(model, ws.linear.effective_mode()) {
         grown::grow(model, grown, ws, y)?;
     }
@@ -461,6 +462,24 @@ pub(crate) fn solve_step(
     *contact = saved;
     f_ext.copy_from_slice(old_ext);
     Err(error)
+}
+
+/// With self-contact, Newton must start where the fabric does not cross
+/// itself: the step's first guess (the predictor) is pulled back along
+/// the straight line from the step's start to the largest fraction that
+/// continuous collision detection allows (the start itself is such a
+/// state: the last converged step's, or the initial mesh).
+fn feasible_guess(model: &Model, y: &mut [f64], start: Option<&[f64]>) {
+    let (Some(sc), Some(start)) = (model.self_contact(), start) else {
+        return;
+    };
+    let dy: Vec<f64> = y.iter().zip(start).map(|(a, b)| a - b).collect();
+    let alpha = sc.max_step(start, &dy);
+    if alpha < 1.0 {
+        for ((yi, si), di) in y.iter_mut().zip(start).zip(&dy) {
+            *yi = si + alpha * di;
+        }
+    }
 }
 
 /// A converged step that compresses an element of a membrane without
