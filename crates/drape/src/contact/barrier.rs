@@ -102,6 +102,15 @@ impl PairKind {
 /// The squared distance `s`, its gradient (12, node-major) and Hessian
 /// (12 x 12, row-major) at `x` (module docs).
 pub fn squared_distance(kind: PairKind, x: &[[f64; 3]; 4]) -> (f64, [f64; 12], [f64; 144]) {
+    let (s, g, h, _) = distance_parts(kind, x);
+    (s, g, h)
+}
+
+/// [`squared_distance`] and a set of 12-vectors spanning the range of its
+/// Hessian and gradient (`w ⊗ e_a` for the three axes and the columns of
+/// `f_xθ`, module docs): at most five, so that a pair's Hessian can be
+/// projected in that subspace.
+fn distance_parts(kind: PairKind, x: &[[f64; 3]; 4]) -> (f64, [f64; 12], [f64; 144], Vec<[f64; 12]>) {
     let c = kind.closest(x);
     let w = c.weights;
     let r = (0..4).fold([0.0; 3], |acc, i| add(acc, scale(x[i], w[i])));
@@ -132,8 +141,11 @@ pub fn squared_distance(kind: PairKind, x: &[[f64; 3]; 4]) -> (f64, [f64; 12], [
     }
     d.retain(|v| dot(*v, *v) > 0.0);
     let m = d.len().min(dirs.len());
+    let mut span: Vec<[f64; 12]> = (0..3)
+        .map(|a| std::array::from_fn(|k| if k % 3 == a { w[k / 3] } else { 0.0 }))
+        .collect();
     if m == 0 {
-        return (c.d2, g, h);
+        return (c.d2, g, h, span);
     }
     // f_θθ = 2 Dᵀ D and its inverse.
     let f: Vec<Vec<f64>> = (0..m)
@@ -171,7 +183,71 @@ pub fn squared_distance(kind: PairKind, x: &[[f64; 3]; 4]) -> (f64, [f64; 12], [
             h[p * 12 + q] -= s;
         }
     }
-    (c.d2, g, h)
+    span.extend(b);
+    (c.d2, g, h, span)
+}
+
+/// Replaces the symmetric 12 x 12 `h`, whose range lies in the span of
+/// `span`, by its positive semi-definite part, computed in that subspace:
+/// with `Q` an orthonormal basis of the span (at most five columns),
+/// `H = Q (Qᵀ H Q) Qᵀ` and `H+ = Q (Qᵀ H Q)+ Qᵀ` — a 5 x 5 eigenproblem
+/// instead of a 12 x 12 one.
+fn project_in_span(h: &mut [f64; 144], span: &[[f64; 12]]) {
+    let mut q: Vec<[f64; 12]> = Vec::with_capacity(span.len());
+    let scale = span.iter().map(|v| dot12(v, v)).fold(0.0f64, f64::max).sqrt();
+    for v in span {
+        let mut u = *v;
+        for _ in 0..2 {
+            for e in &q {
+                let c = dot12(&u, e);
+                for k in 0..12 {
+                    u[k] -= c * e[k];
+                }
+            }
+        }
+        let n = dot12(&u, &u).sqrt();
+        if n > 1e-10 * scale {
+            q.push(u.map(|v| v / n));
+        }
+    }
+    let k = q.len();
+    let mut hq = [[0.0; 12]; 5];
+    for (j, e) in q.iter().enumerate() {
+        for p in 0..12 {
+            hq[j][p] = (0..12).map(|r| h[p * 12 + r] * e[r]).sum();
+        }
+    }
+    let mut m = [0.0; 25];
+    for i in 0..k {
+        for j in 0..k {
+            m[i * k + j] = dot12(&q[i], &hq[j]);
+        }
+    }
+    for i in 0..k {
+        for j in 0..i {
+            let a = 0.5 * (m[i * k + j] + m[j * k + i]);
+            m[i * k + j] = a;
+            m[j * k + i] = a;
+        }
+    }
+    if !crate::psd::project(&mut m, k, k) {
+        return;
+    }
+    for p in 0..12 {
+        for r in 0..12 {
+            let mut v = 0.0;
+            for i in 0..k {
+                for j in 0..k {
+                    v += q[i][p] * m[i * k + j] * q[j][r];
+                }
+            }
+            h[p * 12 + r] = v;
+        }
+    }
+}
+
+fn dot12(a: &[f64; 12], b: &[f64; 12]) -> f64 {
+    (0..12).map(|k| a[k] * b[k]).sum()
 }
 
 /// `b(s)`, `b'(s)`, `b''(s)` of the barrier with `ŝ = s_hat` (module
@@ -198,14 +274,16 @@ pub fn pair_barrier(
     x: &[[f64; 3]; 4],
     s_hat: f64,
     kappa: f64,
-    hessian: bool,
+    hessian: Hessian,
 ) -> Option<(f64, [f64; 12], Option<[f64; 144]>)> {
     let s = kind.closest(x).d2;
     if s >= s_hat {
         return None;
     }
-    let (ds, dh) = if hessian {
-        let (_, g, h) = squared_distance(kind, x);
+    let mut span = Vec::new();
+    let (ds, dh) = if hessian != Hessian::None {
+        let (_, g, h, basis) = distance_parts(kind, x);
+        span = basis;
         (g, Some(h))
     } else {
         let c = kind.closest(x);
@@ -221,9 +299,23 @@ pub fn pair_barrier(
                 out[p * 12 + q] = kappa * (b2 * ds[p] * ds[q] + b1 * h2[p * 12 + q]);
             }
         }
+        if hessian == Hessian::Projected {
+            project_in_span(&mut out, &span);
+        }
         out
     });
     Some((kappa * b, grad, hess))
+}
+
+/// Which Hessian [`pair_barrier`] gives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Hessian {
+    /// None: value and gradient only.
+    None,
+    /// The exact one.
+    Exact,
+    /// Its positive semi-definite part.
+    Projected,
 }
 
 /// The distance between the boxes of the pair's two primitives (0 where
@@ -450,18 +542,18 @@ mod tests {
                 s.sqrt()
             );
             let e = |v: &[f64]| {
-                pair_barrier(kind, &nodes(v), d_hat * d_hat, 1e6, false)
+                pair_barrier(kind, &nodes(v), d_hat * d_hat, 1e6, Hessian::None)
                     .unwrap()
                     .0
             };
             let g = |v: &[f64]| {
-                pair_barrier(kind, &nodes(v), d_hat * d_hat, 1e6, false)
+                pair_barrier(kind, &nodes(v), d_hat * d_hat, 1e6, Hessian::None)
                     .unwrap()
                     .1
                     .to_vec()
             };
             let h = |v: &[f64]| {
-                pair_barrier(kind, &nodes(v), d_hat * d_hat, 1e6, true)
+                pair_barrier(kind, &nodes(v), d_hat * d_hat, 1e6, Hessian::Exact)
                     .unwrap()
                     .2
                     .unwrap()
@@ -474,6 +566,39 @@ mod tests {
                 "{kind:?}: gradient {eg:e}, Hessian {eh:e}"
             );
         }
+    }
+
+    /// The projection in the Hessian's five-dimensional span equals the
+    /// projection of the whole 12 x 12 matrix (faer's eigendecomposition
+    /// through `psd`), on random pairs of both kinds closer than `d̂`, and
+    /// leaves a positive semi-definite Hessian untouched.
+    #[test]
+    fn projection_in_the_span_equals_the_full_projection() {
+        let mut rng = Rng(0xfeed_5eed_0042);
+        let d_hat = 0.5f64;
+        let mut changed = 0;
+        for kind in [PairKind::PointTriangle, PairKind::EdgeEdge] {
+            let mut done = 0;
+            while done < 200 {
+                let v: Vec<f64> = (0..12).map(|_| rng.next()).collect();
+                let x = nodes(&v);
+                let Some((_, _, Some(exact))) = pair_barrier(kind, &x, d_hat * d_hat, 1.0, Hessian::Exact) else {
+                    continue;
+                };
+                let (_, _, Some(fast)) = pair_barrier(kind, &x, d_hat * d_hat, 1.0, Hessian::Projected).unwrap() else {
+                    unreachable!()
+                };
+                let mut full = exact;
+                if crate::psd::project(&mut full, 12, 12) {
+                    changed += 1;
+                }
+                let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let err = (0..144).map(|k| (fast[k] - full[k]).abs()).fold(0.0f64, f64::max);
+                assert!(err <= 1e-9 * scale, "{kind:?}: {err:e} of {scale:e}");
+                done += 1;
+            }
+        }
+        assert!(changed > 50, "{changed}");
     }
 
     /// A node falling onto a triangle stops short of it: the fraction ACCD

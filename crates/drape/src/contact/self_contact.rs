@@ -32,8 +32,8 @@
 //! whose barrier is infinite is rejected, so every accepted iterate keeps
 //! every pair apart.
 
-use super::barrier::{PairKind, additive_ccd, box_separation, pair_barrier};
-use super::proximity::{Candidates, candidates, close_pairs, edges_of, swept_candidates};
+use super::barrier::{Hessian, PairKind, additive_ccd, box_separation, pair_barrier};
+use super::proximity::{Candidates, close_pairs, edges_of, swept_candidates};
 use crate::solver::SparsePattern;
 use crate::vec3::norm;
 use std::sync::Mutex;
@@ -170,7 +170,8 @@ impl SelfContact {
     }
 
     /// Calls `f` with a superset of the pairs that come closer than `d̂`
-    /// at `x` or anywhere within `reach` of it: the kept broad phase when
+    /// at `x` or anywhere within `reach` of it (the pairs closer than a
+    /// margin, measured when it was made): the kept broad phase when
     /// no node has moved far enough since it was made to bring a pair in
     /// from outside it, else a new one made at `x` with room (its margin
     /// `2 d̂ + 2 reach` more than needed, so that the next evaluations,
@@ -191,7 +192,7 @@ impl SelfContact {
         };
         if self.distance + 2.0 * (moved + reach) > kept.margin {
             let margin = 3.0 * self.distance + 2.0 * reach;
-            kept.pairs = candidates(x, &self.triangles, &self.edges, margin);
+            kept.pairs = close_pairs(x, &self.triangles, &self.edges, margin);
             kept.at = x.to_vec();
             kept.margin = margin;
         }
@@ -231,8 +232,8 @@ impl SelfContact {
         self.for_close_pairs(&x, |kind, pos, a, b| pairs.push((kind, pos, a, b)));
         for (kind, pos, a, b) in pairs {
             let nodes = self.nodes(kind, a, b);
-            let Some((e, grad, hess)) = pair_barrier(kind, &pos, s_hat, self.kappa, h.is_some())
-            else {
+            let which = if h.is_some() { Hessian::Projected } else { Hessian::None };
+            let Some((e, grad, hess)) = pair_barrier(kind, &pos, s_hat, self.kappa, which) else {
                 continue;
             };
             value += e;
@@ -244,8 +245,7 @@ impl SelfContact {
                     g[3 * n + c] += grad[3 * i + c];
                 }
             }
-            if let (Some((values, pattern)), Some(mut k)) = (h.as_mut(), hess) {
-                crate::psd::project(&mut k, 12, 12);
+            if let (Some((values, pattern)), Some(k)) = (h.as_mut(), hess) {
                 scatter(&k, &nodes, values, pattern, None);
             }
         }
@@ -270,10 +270,9 @@ impl SelfContact {
         self.for_close_pairs(&x, |kind, pos, a, b| pairs.push((kind, pos, a, b)));
         for (kind, pos, a, b) in pairs {
             let nodes = self.nodes(kind, a, b);
-            if let Some((e, _, Some(mut k))) = pair_barrier(kind, &pos, s_hat, self.kappa, true)
+            if let Some((e, _, Some(k))) = pair_barrier(kind, &pos, s_hat, self.kappa, Hessian::Projected)
                 && e.is_finite()
             {
-                crate::psd::project(&mut k, 12, 12);
                 scatter(&k, &nodes, values, pattern, Some(fixed));
             }
         }
