@@ -34,4 +34,8 @@ pub const ALL: &[(&str, &str)] = &[
         "inflated-disc",
         include_str!("../../../examples/inflated-disc.toml"),
     ),
+    (
+        "folding-cloth",
+        include_str!("../../../examples/folding-cloth.toml"),
+    ),
 ];

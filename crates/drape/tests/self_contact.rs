@@ -205,7 +205,9 @@ segments = [ {{ steps = 300, dt = 1.0e-3 }} ]
     };
     let (on, _, steps, builds) = drive(&text("self = true\nself_distance = 1.0e-3"), 0.3);
     let worst = on.iter().copied().max().unwrap_or(0);
-    eprintln!("strip, self-contact: {steps} steps, layout built {builds} times, most crossings {worst}");
+    eprintln!(
+        "strip, self-contact: {steps} steps, layout built {builds} times, most crossings {worst}"
+    );
     assert_eq!(worst, 0, "crossings per step: {on:?}");
     let (off, _, _, _) = drive(&text(""), 0.3);
     let most = off.iter().copied().max().unwrap_or(0);
@@ -265,7 +267,9 @@ segments = [ {{ steps = 250, dt = 1.0e-3 }} ]
     };
     let (on, _, steps, builds) = drive(&text("self = true\nself_distance = 1.0e-3"), 0.25);
     let worst = on.iter().copied().max().unwrap_or(0);
-    eprintln!("pushed cloth, self-contact: {steps} steps, layout built {builds} times, most crossings {worst}");
+    eprintln!(
+        "pushed cloth, self-contact: {steps} steps, layout built {builds} times, most crossings {worst}"
+    );
     assert_eq!(worst, 0, "crossings per step: {on:?}");
     let (off, _, _, _) = drive(&text(""), 0.25);
     let most = off.iter().copied().max().unwrap_or(0);

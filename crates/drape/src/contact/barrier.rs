@@ -110,7 +110,10 @@ pub fn squared_distance(kind: PairKind, x: &[[f64; 3]; 4]) -> (f64, [f64; 12], [
 /// Hessian and gradient (`w ⊗ e_a` for the three axes and the columns of
 /// `f_xθ`, module docs): at most five, so that a pair's Hessian can be
 /// projected in that subspace.
-fn distance_parts(kind: PairKind, x: &[[f64; 3]; 4]) -> (f64, [f64; 12], [f64; 144], Vec<[f64; 12]>) {
+fn distance_parts(
+    kind: PairKind,
+    x: &[[f64; 3]; 4],
+) -> (f64, [f64; 12], [f64; 144], Vec<[f64; 12]>) {
     let c = kind.closest(x);
     let w = c.weights;
     let r = (0..4).fold([0.0; 3], |acc, i| add(acc, scale(x[i], w[i])));
@@ -194,7 +197,11 @@ fn distance_parts(kind: PairKind, x: &[[f64; 3]; 4]) -> (f64, [f64; 12], [f64; 1
 /// instead of a 12 x 12 one.
 fn project_in_span(h: &mut [f64; 144], span: &[[f64; 12]]) {
     let mut q: Vec<[f64; 12]> = Vec::with_capacity(span.len());
-    let scale = span.iter().map(|v| dot12(v, v)).fold(0.0f64, f64::max).sqrt();
+    let scale = span
+        .iter()
+        .map(|v| dot12(v, v))
+        .fold(0.0f64, f64::max)
+        .sqrt();
     for v in span {
         let mut u = *v;
         for _ in 0..2 {
@@ -582,10 +589,14 @@ mod tests {
             while done < 200 {
                 let v: Vec<f64> = (0..12).map(|_| rng.next()).collect();
                 let x = nodes(&v);
-                let Some((_, _, Some(exact))) = pair_barrier(kind, &x, d_hat * d_hat, 1.0, Hessian::Exact) else {
+                let Some((_, _, Some(exact))) =
+                    pair_barrier(kind, &x, d_hat * d_hat, 1.0, Hessian::Exact)
+                else {
                     continue;
                 };
-                let (_, _, Some(fast)) = pair_barrier(kind, &x, d_hat * d_hat, 1.0, Hessian::Projected).unwrap() else {
+                let (_, _, Some(fast)) =
+                    pair_barrier(kind, &x, d_hat * d_hat, 1.0, Hessian::Projected).unwrap()
+                else {
                     unreachable!()
                 };
                 let mut full = exact;
@@ -593,7 +604,9 @@ mod tests {
                     changed += 1;
                 }
                 let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                let err = (0..144).map(|k| (fast[k] - full[k]).abs()).fold(0.0f64, f64::max);
+                let err = (0..144)
+                    .map(|k| (fast[k] - full[k]).abs())
+                    .fold(0.0f64, f64::max);
                 assert!(err <= 1e-9 * scale, "{kind:?}: {err:e} of {scale:e}");
                 done += 1;
             }

@@ -232,7 +232,11 @@ impl SelfContact {
         self.for_close_pairs(&x, |kind, pos, a, b| pairs.push((kind, pos, a, b)));
         for (kind, pos, a, b) in pairs {
             let nodes = self.nodes(kind, a, b);
-            let which = if h.is_some() { Hessian::Projected } else { Hessian::None };
+            let which = if h.is_some() {
+                Hessian::Projected
+            } else {
+                Hessian::None
+            };
             let Some((e, grad, hess)) = pair_barrier(kind, &pos, s_hat, self.kappa, which) else {
                 continue;
             };
@@ -270,7 +274,8 @@ impl SelfContact {
         self.for_close_pairs(&x, |kind, pos, a, b| pairs.push((kind, pos, a, b)));
         for (kind, pos, a, b) in pairs {
             let nodes = self.nodes(kind, a, b);
-            if let Some((e, _, Some(k))) = pair_barrier(kind, &pos, s_hat, self.kappa, Hessian::Projected)
+            if let Some((e, _, Some(k))) =
+                pair_barrier(kind, &pos, s_hat, self.kappa, Hessian::Projected)
                 && e.is_finite()
             {
                 scatter(&k, &nodes, values, pattern, Some(fixed));
