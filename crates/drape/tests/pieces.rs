@@ -1,6 +1,6 @@
 //! Meshes of several disconnected pieces (issue 33): the two plies of a
 //! Gmsh file (`tests/meshes/two-plies-t3.msh`, made by
-//! `scripts/meshes/two_plies_mesh.py`) and the two groups of an OBJ file
+//! `scripts/meshes/self_contact_meshes.py`) and the two groups of an OBJ file
 //! are read whole, counted as pieces, and the selectors (`within`, `at`,
 //! `boundary`) take nodes of both.
 

@@ -2,13 +2,13 @@
 //! crossing counter (an edge through a triangle it shares no node with):
 //!
 //! - two plies of one Gmsh file (`tests/meshes/two-plies-t3.msh`, two
-//!   20 cm squares 1 cm apart, made by `scripts/meshes/two_plies_mesh.py`)
+//!   20 cm squares 1 cm apart, made by `scripts/meshes/self_contact_meshes.py`)
 //!   dropped together onto a 10 cm pedestal: without self-contact the upper
 //!   ply passes through the lower one as soon as the lower one lands; with
 //!   `self = true` never, and the plies stay at least `self_distance / 2`
 //!   apart;
 //! - a 40 cm strip standing almost upright (`tests/meshes/leaning-strip-t3.msh`,
-//!   `scripts/meshes/leaning_strip_mesh.py`) dropped onto a plane, where it
+//!   `scripts/meshes/self_contact_meshes.py`) dropped onto a plane, where it
 //!   buckles and piles up on itself;
 //! - a cloth lying on a plane pushed into folds by two walls closing in.
 //!
@@ -56,11 +56,24 @@ fn drop_plies(contact: &str, end: f64) -> (Vec<usize>, Vec<f64>, usize, usize) {
     drive(&scenario(contact), end)
 }
 
+/// [`drive_through`] without the trajectory.
+fn drive(text: &str, end: f64) -> (Vec<usize>, Vec<f64>, usize, usize) {
+    let (crossings, y, steps, builds, _) = drive_through(text, end, None);
+    (crossings, y, steps, builds)
+}
+
+/// `(time, position)` of one node after every step.
+type Track = Vec<(f64, [f64; 3])>;
+
 /// Steps scenario `text` to `end` (s) from 1 ms steps, halving a step that
 /// fails and growing it back after one that converges, and returns the
-/// crossings after every step, the final positions, the steps taken and
-/// how many times the Hessian's layout was built.
-fn drive(text: &str, end: f64) -> (Vec<usize>, Vec<f64>, usize, usize) {
+/// crossings after every step, the final positions, the steps taken, how
+/// many times the Hessian's layout was built, and the track of `node`.
+fn drive_through(
+    text: &str,
+    end: f64,
+    node: Option<usize>,
+) -> (Vec<usize>, Vec<f64>, usize, usize, Track) {
     use drape::integrator::newmark::DynamicWorkspace;
     let s = setup(text);
     let drape::setup::Analysis::Dynamic { newmark, .. } = &s.analysis else {
@@ -77,6 +90,7 @@ fn drive(text: &str, end: f64) -> (Vec<usize>, Vec<f64>, usize, usize) {
     let mut state = newmark.initial_state(&s.model, &mut ws).unwrap();
     let length = drape::simulation::reference_length(&s.model.initial_positions());
     let (mut dt, mut seen, mut steps) = (1e-3f64, Vec::new(), 0);
+    let mut track = Vec::new();
     while state.time < end - 1e-12 {
         let saved = state.clone();
         let h = dt.min(end - state.time);
@@ -88,6 +102,9 @@ fn drive(text: &str, end: f64) -> (Vec<usize>, Vec<f64>, usize, usize) {
                     .map(|c| [c[0], c[1], c[2]])
                     .collect();
                 seen.push(crossings(&x, &triangles, &edges));
+                if let Some(a) = node {
+                    track.push((state.time, x[a]));
+                }
                 steps += 1;
                 dt = (2.0 * dt).min(1e-3);
             }
@@ -98,7 +115,7 @@ fn drive(text: &str, end: f64) -> (Vec<usize>, Vec<f64>, usize, usize) {
             }
         }
     }
-    (seen, state.positions, steps, ws.layout_builds())
+    (seen, state.positions, steps, ws.layout_builds(), track)
 }
 
 /// The plies landing on the pedestal (the lower at t = 64 ms, the upper on
@@ -275,4 +292,101 @@ segments = [ {{ steps = 250, dt = 1.0e-3 }} ]
     let most = off.iter().copied().max().unwrap_or(0);
     eprintln!("pushed cloth without self-contact: up to {most} crossings");
     assert!(most > 10);
+}
+
+/// Friction between the layers: a 6 cm ply lying on a 20 cm one that is
+/// held (`tests/meshes/ply-on-ply-t3.msh`, `scripts/meshes/self_contact_meshes.py`),
+/// `friction = 0.4`, gravity tilted by θ (an incline). With tan θ = 0.25
+/// the upper ply stays (its corner moves less than 1 mm in 0.15 s); with
+/// θ = 35° it slides with the acceleration `g (sin θ − μ cos θ)` = 2.41
+/// m/s² (the corner's second difference over 0.05 s steps, within 2 %),
+/// and the dissipated energy never decreases. It rests on the barrier just
+/// under `d̂`, and the lower ply is never crossed.
+/// The 6 cm ply on the held 20 cm ply (`tests/meshes/ply-on-ply-t3.msh`),
+/// `friction = mu`, gravity tilted by `theta` along +x, `steps` of 1 ms.
+fn ply_on_ply(theta: f64, mu: f64, steps: usize) -> String {
+    let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/meshes/ply-on-ply-t3.msh");
+    let (s, c) = theta.sin_cos();
+    format!(
+        r#"[mesh]
+shape = "file"
+path = {mesh:?}
+[material]
+youngs_modulus = 2.0e6
+poisson_ratio = 0.3
+density = 320.0
+thickness = 0.6e-3
+bending_rigidity = 1.0e-6
+[[load]]
+kind = "gravity"
+acceleration = [{}, 0.0, {}]
+[[fix]]
+within = {{ min = [-0.2, -0.2, -0.0005], max = [0.2, 0.2, 0.0005] }}
+[contact]
+method = "penalty"
+penalty = 5.0e4
+friction = {mu}
+self = true
+self_distance = 1.0e-3
+[time]
+beta = 1.0
+gamma = 1.5
+segments = [ {{ steps = {steps}, dt = 1.0e-3 }} ]
+"#,
+        G * s,
+        -G * c
+    )
+}
+
+/// Gravity (m/s²).
+const G: f64 = 9.81;
+
+#[test]
+fn a_ply_on_a_ply_holds_below_the_friction_angle_and_slides_above() {
+    let (g, mu) = (G, 0.4);
+    let text = |theta: f64| ply_on_ply(theta, mu, 150);
+    let s = setup(&text(0.0));
+    let corner = (s.model.mesh().nodes.iter())
+        .position(|p| (p[0] - 0.03).abs() < 1e-9 && (p[1] - 0.03).abs() < 1e-9 && p[2] > 0.001)
+        .expect("the upper ply's corner");
+    let stick = 0.25f64.atan();
+    let (seen, _, _, _, track) = drive_through(&text(stick), 0.15, Some(corner));
+    assert_eq!(seen.iter().max(), Some(&0));
+    let moved = track.last().unwrap().1[0] - 0.03;
+    let z = track.last().unwrap().1[2];
+    eprintln!("tan θ = 0.25: the corner moved {moved:e} m, rests at z = {z:e} m");
+    assert!(moved.abs() < 1e-3, "{moved}");
+    assert!(z > 0.9e-3 && z < 1e-3, "{z}");
+    let slide = 35f64.to_radians();
+    let (seen, _, _, _, track) = drive_through(&text(slide), 0.15, Some(corner));
+    assert_eq!(seen.iter().max(), Some(&0));
+    let at = |t: f64| {
+        track
+            .iter()
+            .min_by(|a, b| (a.0 - t).abs().total_cmp(&(b.0 - t).abs()))
+            .unwrap()
+            .1[0]
+    };
+    let a = (at(0.15) - 2.0 * at(0.10) + at(0.05)) / (0.05 * 0.05);
+    let expected = g * (slide.sin() - mu * slide.cos());
+    eprintln!("θ = 35°: acceleration {a:.4} m/s² against {expected:.4}");
+    assert!((a / expected - 1.0).abs() < 0.02, "{a} vs {expected}");
+}
+
+/// The dissipation of friction between the layers reaches the history:
+/// `friction_dissipation` never decreases and grows while the ply slides.
+#[test]
+fn friction_between_layers_dissipates() {
+    let text = ply_on_ply(35f64.to_radians(), 0.4, 60);
+    let dir = common::temp_dir("self-friction");
+    let path = dir.join("s.toml");
+    std::fs::write(&path, &text).unwrap();
+    let (scenario, source) = drape::scenario::Scenario::read(&path).unwrap();
+    let s = scenario.build(&path, &source).unwrap();
+    let out = dir.join("out");
+    drape::simulation::run(&s, &out, &mut |_| {}).expect("runs");
+    let (header, rows) = common::read_history(&out);
+    let d = common::column(&header, &rows, "friction_dissipation");
+    assert!(d.windows(2).all(|w| w[1] >= w[0]), "{d:?}");
+    assert!(*d.last().unwrap() > 1e-6, "{d:?}");
 }

@@ -133,6 +133,22 @@ pub struct ContactModel {
 /// size a second).
 pub const DEFAULT_STICK_SPEED: f64 = 1e-3;
 
+/// Friction's mollifier `f0(s)`, `f1(s) = f0'(s)` and `f1'(s)`
+/// (`integrator::terms::friction`'s module docs), for a slip
+/// `s >= 0` and the smoothing slip `e > 0`.
+pub(crate) fn mollifier(s: f64, e: f64) -> (f64, f64, f64) {
+    if s >= e {
+        (s, 1.0, 0.0)
+    } else {
+        let r = s / e;
+        (
+            e * (-r * r * r / 3.0 + r * r + 1.0 / 3.0),
+            -r * r + 2.0 * r,
+            (2.0 - 2.0 * r) / e,
+        )
+    }
+}
+
 /// Contact state carried from step to step.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ContactState {

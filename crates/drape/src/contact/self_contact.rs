@@ -25,6 +25,24 @@
 //! but makes Newton's Hessian an approximation there: convergence is then
 //! linear rather than quadratic.
 //!
+//! **Friction** between the fabric's own layers, with `[contact]
+//! friction` and `stick_speed` as for the obstacles: the smoothed, lagged potential of
+//! Incremental Potential Contact (Li et al. 2020, §5) as the obstacles'
+//! (`integrator::terms::friction`). For each pair closer than `d̂` at the
+//! step's start `x`, the closest points' weights `w`, the normal `n` (from
+//! the second closest point to the first) and the barrier's normal force
+//! `lambda = kappa |b'(s)| 2 d` are lagged from there, and the pair's
+//! relative slip over the step costs
+//!
+//! ```text
+//! u = (I - n nᵀ) sum_i w_i (y_i - x_i),     D = mu lambda f0(|u|)
+//! ```
+//!
+//! (`f0` the mollifier of the obstacles' friction, with the slip speed
+//! `stick_speed`). Its gradient on node `i` is `w_i mu lambda f1 u / |u|`
+//! and its Hessian block `(i, j)` is `w_i w_j` times the obstacles'
+//! positive semi-definite 3 x 3, so the whole 12 x 12 is semi-definite.
+//!
 //! **The step never crosses.** [`SelfContact::max_step`] is the largest
 //! fraction of a Newton increment that additive CCD allows over the pairs
 //! that may meet (those whose boxes swept over the increment overlap,
@@ -55,6 +73,10 @@ pub struct SelfContact {
     kappa: f64,
     /// The broad phase kept across evaluations.
     kept: Mutex<Kept>,
+    /// Coulomb's coefficient between the layers.
+    friction: f64,
+    /// The slip speed below which that friction is viscous (m/s).
+    stick_speed: f64,
 }
 
 /// The broad phase's pairs at positions `at`: every pair closer than
@@ -64,6 +86,19 @@ struct Kept {
     at: Vec<[f64; 3]>,
     margin: f64,
     pairs: Candidates,
+}
+
+/// What a scenario asks of self-contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SelfContactSpec {
+    /// `d̂` (m).
+    pub distance: f64,
+    /// The penalty `eta` (N/m) that `kappa = eta / d̂^2` derives from.
+    pub stiffness: f64,
+    /// Coulomb's coefficient between the layers.
+    pub friction: f64,
+    /// The slip speed below which that friction is viscous (m/s).
+    pub stick_speed: f64,
 }
 
 /// The initial mesh already has a pair closer than `d̂`.
@@ -85,7 +120,8 @@ pub struct TooClose {
 impl SelfContact {
     /// Self-contact of the `triangles` (a linear mesh's elements, a higher
     /// order's sub-triangles) at the initial positions `x`, with distance
-    /// `d̂ = distance` and penalty `eta` (N/m).
+    /// `d̂ = distance` and penalty `eta` (N/m); frictionless
+    /// ([`SelfContact::with_friction`]).
     pub fn new(
         triangles: Vec<[usize; 3]>,
         x: &[f64],
@@ -99,6 +135,8 @@ impl SelfContact {
             distance,
             kappa: eta / (distance * distance),
             kept: Mutex::new(Kept::default()),
+            friction: 0.0,
+            stick_speed: super::DEFAULT_STICK_SPEED,
         };
         let pts = points(x);
         if let Some((d, what)) = s.closest_pair(&pts) {
@@ -109,6 +147,25 @@ impl SelfContact {
             });
         }
         Ok(s)
+    }
+
+    /// With friction `mu` between the layers and the slip speed
+    /// `stick_speed` (m/s) below which it is viscous (module docs,
+    /// "Friction").
+    pub fn with_friction(mut self, mu: f64, stick_speed: f64) -> Self {
+        self.friction = mu;
+        self.stick_speed = stick_speed;
+        self
+    }
+
+    /// Coulomb's coefficient between the layers (0: frictionless).
+    pub fn friction(&self) -> f64 {
+        self.friction
+    }
+
+    /// The slip speed below which friction is viscous (m/s).
+    pub fn stick_speed(&self) -> f64 {
+        self.stick_speed
     }
 
     /// `d̂` (m).
@@ -283,6 +340,33 @@ impl SelfContact {
         }
     }
 
+    /// The pairs closer than `d̂` at the step's start positions `start`,
+    /// lagged for friction with coefficient `mu` (module docs,
+    /// "Friction"): their nodes, closest-point weights and normal, and
+    /// `mu lambda` with `lambda` the barrier's normal force there.
+    pub fn lag_friction(&self, start: &[f64], mu: f64) -> Vec<LaggedPair> {
+        let x = points(start);
+        let s_hat = self.distance * self.distance;
+        let mut out = Vec::new();
+        self.for_close_pairs(&x, |kind, pos, a, b| {
+            let c = kind.closest(&pos);
+            let r = (0..4).fold([0.0; 3], |acc, i| {
+                crate::vec3::add(acc, crate::vec3::scale(pos[i], c.weights[i]))
+            });
+            let d = norm(r);
+            let (_, b1, _) = super::barrier::barrier(c.d2, s_hat);
+            if d > 0.0 && b1.is_finite() {
+                out.push(LaggedPair {
+                    nodes: self.nodes(kind, a, b),
+                    weights: c.weights,
+                    normal: crate::vec3::scale(r, 1.0 / d),
+                    force: mu * self.kappa * (-b1) * 2.0 * d,
+                });
+            }
+        });
+        out
+    }
+
     /// The four-node stencils of every pair closer than `distance` at `y`:
     /// the couplings a Hessian layout makes room for.
     pub fn stencils_near(&self, y: &[f64], distance: f64) -> Vec<[usize; 4]> {
@@ -333,6 +417,113 @@ impl SelfContact {
         }
         t
     }
+}
+
+/// A pair in contact at the start of a step, lagged for friction
+/// ([`SelfContact::lag_friction`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LaggedPair {
+    /// Its four nodes.
+    pub nodes: [usize; 4],
+    /// `w`: the relative position of its closest points is `sum_i w_i x_i`.
+    pub weights: [f64; 4],
+    /// The unit normal from the second closest point to the first.
+    pub normal: [f64; 3],
+    /// `mu lambda` (N).
+    pub force: f64,
+}
+
+/// The friction of one lagged pair (module docs, "Friction") for the nodes'
+/// displacements `delta` over the step: the energy `mu lambda f0(|u|)`,
+/// its gradient (12) and its Hessian (12 x 12, positive semi-definite),
+/// and the work done against the slip `mu lambda f1 |u|`, with `e` the
+/// smoothing slip.
+pub fn pair_friction(
+    pair: &LaggedPair,
+    delta: &[[f64; 3]; 4],
+    e: f64,
+) -> (f64, [f64; 12], [f64; 144], f64) {
+    let n = pair.normal;
+    let w = pair.weights;
+    let rel = (0..4).fold([0.0; 3], |acc, i| {
+        crate::vec3::add(acc, crate::vec3::scale(delta[i], w[i]))
+    });
+    let dn = crate::vec3::dot(rel, n);
+    let u: [f64; 3] = std::array::from_fn(|i| rel[i] - dn * n[i]);
+    let s = norm(u);
+    let (f0, f1, df1) = super::mollifier(s, e);
+    let f = pair.force;
+    let mut g = [0.0; 12];
+    if s > 0.0 {
+        for i in 0..4 {
+            for a in 0..3 {
+                g[3 * i + a] = f * f1 * w[i] * u[a] / s;
+            }
+        }
+    }
+    let (ca, cb) = if s > 0.0 {
+        (f1 / s, (df1 - f1 / s) / (s * s))
+    } else {
+        (2.0 / e, 0.0)
+    };
+    let mut k = [0.0; 9];
+    for a in 0..3 {
+        for b in 0..3 {
+            let t = f64::from(u8::from(a == b)) - n[a] * n[b];
+            k[3 * a + b] = f * (ca * t + cb * u[a] * u[b]);
+        }
+    }
+    let mut h = [0.0; 144];
+    for i in 0..4 {
+        for j in 0..4 {
+            for a in 0..3 {
+                for b in 0..3 {
+                    h[(3 * i + a) * 12 + 3 * j + b] = w[i] * w[j] * k[3 * a + b];
+                }
+            }
+        }
+    }
+    (f * f0, g, h, f * f1 * s)
+}
+
+/// Where a Hessian goes: values on a pattern and, if given, the held
+/// degrees of freedom to leave out.
+pub type HessianTarget<'a> = (&'a mut [f64], &'a SparsePattern, Option<&'a [bool]>);
+
+/// Adds the friction of `pairs` at `y` from the step's start `start` to
+/// `g` and, with `h`, its Hessian on a pattern (couplings it lacks to the
+/// diagonal; the held degrees of freedom left out when `fixed` is given);
+/// returns the energy and the dissipation.
+pub fn add_friction(
+    pairs: &[LaggedPair],
+    start: &[f64],
+    y: &[f64],
+    e: f64,
+    g: Option<&mut [f64]>,
+    h: Option<HessianTarget<'_>>,
+) -> (f64, f64) {
+    let (mut energy, mut dissipated) = (0.0, 0.0);
+    let mut g = g;
+    let mut h = h;
+    for pair in pairs {
+        let delta: [[f64; 3]; 4] = pair
+            .nodes
+            .map(|a| std::array::from_fn(|i| y[3 * a + i] - start[3 * a + i]));
+        let (v, grad, hess, work) = pair_friction(pair, &delta, e);
+        energy += v;
+        dissipated += work;
+        if let Some(g) = g.as_deref_mut() {
+            for (i, &a) in pair.nodes.iter().enumerate() {
+                for c in 0..3 {
+                    g[3 * a + c] += grad[3 * i + c];
+                }
+            }
+        }
+        if let Some((values, pattern, fixed)) = h.as_mut() {
+            scatter(&hess, &pair.nodes, values, pattern, *fixed);
+        }
+    }
+    (energy, dissipated)
 }
 
 /// `y` as points.

@@ -21,6 +21,7 @@ use crate::solver::newton::{
 use potential::{IncrementalPotential, StepContext, StepTerm};
 use terms::{
     BendingTerm, FrictionTerm, InertiaTerm, LoadTerm, MembraneTerm, PenaltyTerm, SelfContactTerm,
+    SelfFrictionTerm,
 };
 
 /// The state carried from step to step.
@@ -136,9 +137,8 @@ impl NewtonSystem for StepSystem<'_> {
             for (k, &v) in grown.model_values.iter().enumerate() {
                 h[grown.map[k]] = v;
             }
-            if let Some(sc) = model.self_contact() {
-                sc.add_hessian(y, h, &grown.pattern, model.fixed());
-            }
+            self.potential
+                .add_outside(&ctx, y, h, &grown.pattern, model.fixed());
             let symmetric = model.symmetric_by_construction()
                 || model.pattern().is_symmetric(&grown.model_values, 1e-10);
             return Evaluation {
@@ -323,6 +323,21 @@ fn step_potential<'a>(
                 state,
             )));
         }
+    }
+    if let Some(self_contact) = model.self_contact()
+        && let Some((start, dt)) = terms.start
+        && self_contact.friction() > 0.0
+    {
+        // Friction between the layers: `[contact] friction`, lagged from
+        // the step's start (dynamic steps only, as against obstacles).
+        list.push(Box::new(SelfFrictionTerm::new(
+            self_contact,
+            model.pattern(),
+            (start, dt),
+            self_contact.friction(),
+            self_contact.stick_speed(),
+            !grown,
+        )));
     }
     if let Some(self_contact) = model.self_contact() {
         // On a grown layout the step adds the pairs' Hessians itself.

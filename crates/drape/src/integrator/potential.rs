@@ -130,6 +130,22 @@ pub trait StepTerm {
         0.0
     }
 
+    /// Adds the Hessian couplings the term has outside the model's
+    /// pattern — on `pattern`, a layout the stepper grew with them
+    /// (`integrator::grown`), leaving out the rows and columns of the
+    /// degrees of freedom `fixed` holds. Called only for a term built to
+    /// leave them out of [`add`](Self::add) (self-contact). Default:
+    /// nothing.
+    fn add_outside(
+        &mut self,
+        _ctx: &StepContext,
+        _y: &[f64],
+        _values: &mut [f64],
+        _pattern: &crate::solver::SparsePattern,
+        _fixed: &[bool],
+    ) {
+    }
+
     /// The largest fraction `alpha` in `(0, 1]` of the increment `dy` that
     /// the term allows from `y` (a barrier's collision-free step, Li et
     /// al. 2020). Default 1: no limit.
@@ -223,6 +239,20 @@ impl<'a> IncrementalPotential<'a> {
     /// evaluation (J).
     pub fn dissipation(&self) -> f64 {
         self.terms.iter().map(|t| t.dissipation()).sum()
+    }
+
+    /// [`StepTerm::add_outside`] of every term.
+    pub fn add_outside(
+        &mut self,
+        ctx: &StepContext,
+        y: &[f64],
+        values: &mut [f64],
+        pattern: &crate::solver::SparsePattern,
+        fixed: &[bool],
+    ) {
+        for t in &mut self.terms {
+            t.add_outside(ctx, y, values, pattern, fixed);
+        }
     }
 
     /// The smallest [`StepTerm::max_step`] of the terms.

@@ -15,7 +15,7 @@ pub use mass::MassKind;
 
 use crate::bending::{Bending, BendingRigidity};
 use crate::contact::ContactModel;
-use crate::contact::self_contact::SelfContact;
+use crate::contact::self_contact::{SelfContact, SelfContactSpec};
 use crate::element::ElementGeometry;
 use crate::element::membrane::Section;
 use crate::load::pressure::PressureQuadrature;
@@ -105,7 +105,7 @@ pub struct ModelBuilder {
     contact: Option<ContactModel>,
     bending: Option<BendingRigidity>,
     clamped: Vec<bool>,
-    self_contact: Option<(f64, f64)>,
+    self_contact: Option<SelfContactSpec>,
 }
 
 impl ModelBuilder {
@@ -143,9 +143,9 @@ impl ModelBuilder {
         self
     }
 
-    /// Self-contact with distance `d̂` and penalty `eta` (N/m), if any
-    /// ([`crate::contact::self_contact`]): on the mesh's (sub-)triangles.
-    pub fn self_contact(mut self, spec: Option<(f64, f64)>) -> Self {
+    /// Self-contact, if any ([`crate::contact::self_contact`]): on the
+    /// mesh's (sub-)triangles.
+    pub fn self_contact(mut self, spec: Option<SelfContactSpec>) -> Self {
         self.self_contact = spec;
         self
     }
@@ -179,12 +179,15 @@ impl ModelBuilder {
         } = self;
         mesh.validate()?;
         let self_contact = match self_contact {
-            Some((distance, eta)) => Some(SelfContact::new(
-                crate::bending::triangulate(&mesh).0,
-                &mesh.nodes.concat(),
-                distance,
-                eta,
-            )?),
+            Some(spec) => Some(
+                SelfContact::new(
+                    crate::bending::triangulate(&mesh).0,
+                    &mesh.nodes.concat(),
+                    spec.distance,
+                    spec.stiffness,
+                )?
+                .with_friction(spec.friction, spec.stick_speed),
+            ),
             None => None,
         };
         let p = mesh.order.degree();

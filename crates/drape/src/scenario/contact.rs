@@ -5,6 +5,7 @@
 use super::check::Checker;
 use super::obstacle::build_body;
 use super::{Scenario, ScenarioError};
+use crate::contact::self_contact::SelfContactSpec;
 use crate::contact::{ContactMethod, ContactModel};
 use crate::input::InputFile;
 use crate::mesh::Mesh;
@@ -235,14 +236,15 @@ pub(super) fn check_initial_penetration(
     Ok(())
 }
 
-/// `[contact] self` and `self_distance`: `Some((d̂, eta))` with self-contact
-/// (its distance, by default the thickness, and the penalty its stiffness
-/// derives from: `[contact] penalty`, or
-/// [`crate::contact::self_contact::DEFAULT_STIFFNESS`]).
+/// `[contact] self` and `self_distance`: with self-contact, its distance
+/// (by default the thickness), the penalty its stiffness derives from
+/// (`[contact] penalty`, or
+/// [`crate::contact::self_contact::DEFAULT_STIFFNESS`]) and the friction
+/// between the layers (`[contact] friction` and `stick_speed`).
 pub(super) fn build_self_contact(
     c: &Checker,
     s: &Scenario,
-) -> Result<Option<(f64, f64)>, ScenarioError> {
+) -> Result<Option<SelfContactSpec>, ScenarioError> {
     let t = "contact";
     let Some(spec) = &s.contact else {
         return Ok(None);
@@ -262,9 +264,28 @@ pub(super) fn build_self_contact(
         Some(d) => c.positive(t, None, "self_distance", d)?,
         None => s.material.thickness,
     };
-    let eta = match spec {
-        ContactSpec::Penalty(p) => p.penalty,
-        ContactSpec::Lagrange(_) => crate::contact::self_contact::DEFAULT_STIFFNESS,
+    // Friction and the slip speed as for the obstacles (build_contact
+    // checks both when there are obstacles; here for when there are none).
+    let (stiffness, friction, stick_speed) = match spec {
+        ContactSpec::Penalty(p) => (p.penalty, p.friction, p.stick_speed),
+        ContactSpec::Lagrange(l) => (
+            crate::contact::self_contact::DEFAULT_STIFFNESS,
+            l.friction,
+            l.stick_speed,
+        ),
     };
-    Ok(Some((distance, eta)))
+    if !(friction.is_finite() && friction >= 0.0) {
+        return Err(c.invalid(
+            t,
+            None,
+            "friction",
+            format!("must be a finite number >= 0 (Coulomb's coefficient), not {friction}"),
+        ));
+    }
+    Ok(Some(SelfContactSpec {
+        distance,
+        stiffness: c.positive(t, None, "penalty", stiffness)?,
+        friction,
+        stick_speed: c.positive(t, None, "stick_speed", stick_speed)?,
+    }))
 }

@@ -42,7 +42,7 @@
 //! the step, `mu lambda f1(s) s` a node, is the energy it dissipates.
 
 use super::super::potential::{Stencils, StepContext, StepTerm, TermValue};
-use crate::contact::{ContactMethod, ContactModel, ContactState};
+use crate::contact::{ContactMethod, ContactModel, ContactState, mollifier};
 use crate::solver::SparsePattern;
 
 /// A node in contact at the start of the step, with what is lagged.
@@ -120,21 +120,6 @@ impl<'a> FrictionTerm<'a> {
     /// evaluation (J).
     pub fn dissipated(&self) -> f64 {
         self.dissipated
-    }
-}
-
-/// `f0(s)`, `f1(s) = f0'(s)` and `f1'(s)` of the module docs, for a slip
-/// `s >= 0` and the smoothing slip `e > 0`.
-fn mollifier(s: f64, e: f64) -> (f64, f64, f64) {
-    if s >= e {
-        (s, 1.0, 0.0)
-    } else {
-        let r = s / e;
-        (
-            e * (-r * r * r / 3.0 + r * r + 1.0 / 3.0),
-            -r * r + 2.0 * r,
-            (2.0 - 2.0 * r) / e,
-        )
     }
 }
 

@@ -11,6 +11,7 @@ mod loads;
 mod membrane;
 mod penalty;
 mod self_contact;
+mod self_friction;
 
 pub use bending::BendingTerm;
 pub use friction::FrictionTerm;
@@ -19,6 +20,7 @@ pub use loads::LoadTerm;
 pub use membrane::MembraneTerm;
 pub use penalty::PenaltyTerm;
 pub use self_contact::SelfContactTerm;
+pub use self_friction::SelfFrictionTerm;
 
 #[cfg(test)]
 pub(crate) use check::{

@@ -57,6 +57,19 @@ impl StepTerm for SelfContactTerm<'_> {
         }
     }
 
+    fn add_outside(
+        &mut self,
+        _ctx: &StepContext,
+        y: &[f64],
+        values: &mut [f64],
+        pattern: &SparsePattern,
+        fixed: &[bool],
+    ) {
+        if !self.hessian {
+            self.contact.add_hessian(y, values, pattern, fixed);
+        }
+    }
+
     fn max_step(&self, _ctx: &StepContext, y: &[f64], dy: &[f64]) -> f64 {
         self.contact.max_step(y, dy)
     }
