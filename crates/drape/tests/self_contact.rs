@@ -151,6 +151,19 @@ fn two_plies_never_cross_with_self_contact() {
     let gap = y[3 * hi + 2] - y[3 * lo + 2];
     eprintln!("centres {gap:e} m apart");
     assert!(gap >= 0.5 * d_hat, "{gap}");
+    // With multipliers against the pedestal (their elimination on the
+    // grown layout): the same guarantee.
+    let text = scenario(&format!("self = true\nself_distance = {d_hat}")).replace(
+        "method = \"penalty\"\npenalty = 5.0e4",
+        "method = \"lagrange\"",
+    );
+    assert!(text.contains("lagrange"));
+    let (lagrange, _, steps, _) = drive(&text, 0.1);
+    eprintln!(
+        "with multipliers: {steps} steps, most crossings {:?}",
+        lagrange.iter().max()
+    );
+    assert_eq!(lagrange.iter().max(), Some(&0));
     let (off, _, _, builds) = drop_plies("", 0.1);
     assert_eq!(builds, 0);
     let last = *off.last().unwrap();

@@ -22,10 +22,12 @@
 //!   degrees of freedom. A pair that appears within a step without its
 //!   stencil in the layout falls back to the diagonal treatment of
 //!   [`crate::contact::self_contact`].
-//! - **where it is not used**: with Lagrange multipliers (their
-//!   elimination rotates the model's rows) and with a linear mode other
-//!   than `direct` (the kept multigrid hierarchy and `reuse`'s factor are
-//!   made for the model's pattern); those keep the diagonal treatment.
+//! - **with multipliers** their elimination (rotating the rows and
+//!   columns of the nodes held on an obstacle) runs on the grown layout,
+//!   after the pairs' couplings are in.
+//! - **where it is not used**: with a linear mode other than `direct`
+//!   (the kept multigrid hierarchy and `reuse`'s factor are made for the
+//!   model's pattern); those keep the diagonal treatment.
 //!
 //! A resumed run starts with the model's layout and grows it again from
 //! the checkpoint's state, so it need not factorise on the same pattern
@@ -62,11 +64,7 @@ pub struct Grown {
 
 /// Whether a step of `model` solved in `mode` uses a grown layout.
 pub(crate) fn applies(model: &Model, mode: LinearMode) -> bool {
-    model.self_contact().is_some()
-        && mode == LinearMode::Direct
-        && model
-            .contact()
-            .is_none_or(|c| c.method != crate::contact::ContactMethod::Lagrange)
+    model.self_contact().is_some() && mode == LinearMode::Direct
 }
 
 /// The couplings of a four-node stencil, `a < b`.

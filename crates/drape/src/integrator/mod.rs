@@ -120,42 +120,39 @@ impl NewtonSystem for StepSystem<'_> {
             contact: self.contact.as_deref(),
             project: (self.projecting && self.can_project).then_some(&self.project[..]),
         };
-        if let (Some(grown), Some(h)) = (self.grown.as_deref_mut(), h.as_deref_mut()) {
-            // Assembled on the model's pattern, supported there, copied
-            // into the grown layout, the pairs' couplings added on it.
-            let value = self
-                .potential
-                .evaluate(&ctx, y, g, Some(&mut grown.model_values));
-            self.strain_energy = self.potential.value("membrane").map_or(0.0, |v| v.value);
-            self.bending_energy = self.potential.value("bending").map_or(0.0, |v| v.value);
-            self.self_contact_energy = self
-                .potential
-                .value("self-contact")
-                .map_or(0.0, |v| v.value);
-            model.apply_supports(g, Some(&mut grown.model_values));
-            h.fill(0.0);
-            for (k, &v) in grown.model_values.iter().enumerate() {
-                h[grown.map[k]] = v;
+        // With a grown layout (self-contact, `grown`) and a Hessian asked
+        // for, the terms assemble on the model's pattern into the layout's
+        // buffer, the supports are applied there, the values are copied
+        // into the grown layout and the pairs' couplings added on it; the
+        // multipliers' elimination then works on the grown layout.
+        let value = match (self.grown.as_deref_mut(), h.as_deref_mut()) {
+            (Some(grown), Some(h)) => {
+                let value = self
+                    .potential
+                    .evaluate(&ctx, y, g, Some(&mut grown.model_values));
+                model.apply_supports(g, Some(&mut grown.model_values));
+                h.fill(0.0);
+                for (k, &v) in grown.model_values.iter().enumerate() {
+                    h[grown.map[k]] = v;
+                }
+                self.potential
+                    .add_outside(&ctx, y, h, &grown.pattern, model.fixed());
+                value
             }
-            self.potential
-                .add_outside(&ctx, y, h, &grown.pattern, model.fixed());
-            let symmetric = model.symmetric_by_construction()
-                || model.pattern().is_symmetric(&grown.model_values, 1e-10);
-            return Evaluation {
-                scale: value.scale,
-                symmetric,
-                energy: value.energy,
-                merit: None,
-            };
-        }
-        let value = self.potential.evaluate(&ctx, y, g, h.as_deref_mut());
+            (_, mut h) => {
+                let value = self.potential.evaluate(&ctx, y, g, h.as_deref_mut());
+                model.apply_supports(g, h);
+                value
+            }
+        };
         self.strain_energy = self.potential.value("membrane").map_or(0.0, |v| v.value);
         self.bending_energy = self.potential.value("bending").map_or(0.0, |v| v.value);
         self.self_contact_energy = self
             .potential
             .value("self-contact")
             .map_or(0.0, |v| v.value);
-        model.apply_supports(g, h.as_deref_mut());
+        let grown = self.grown.as_deref().filter(|_| h.is_some());
+        let pattern = grown.map_or(model.pattern(), |g| &g.pattern);
         let mut merit = None;
         if let (Some(contact), Some(state)) = (model.contact(), self.contact.as_deref())
             && contact.method == ContactMethod::Lagrange
@@ -168,12 +165,12 @@ impl NewtonSystem for StepSystem<'_> {
             merit = Some(ContactModel::impose_lagrange(
                 &mut active,
                 g,
-                h.as_deref_mut().map(|h| (h, model.pattern())),
+                h.as_deref_mut().map(|h| (h, pattern)),
             ));
             self.active = active;
         }
-        let symmetric = model.symmetric_by_construction()
-            || h.is_some_and(|h| model.pattern().is_symmetric(h, 1e-10));
+        let symmetric =
+            model.symmetric_by_construction() || h.is_some_and(|h| pattern.is_symmetric(h, 1e-10));
         Evaluation {
             scale: value.scale,
             symmetric,
