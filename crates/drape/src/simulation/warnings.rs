@@ -17,6 +17,12 @@
 //!   fractions of a millisecond (docs/performance.md, "Settling with
 //!   bending"). With bending, `wrinkling = "none"` lets the folds carry
 //!   the compression.
+//! * **Self-contact with a conservative Newmark.** The trapezoidal rule
+//!   (`gamma` = 1/2) conserves the energy of a quadratic potential, not of
+//!   the self-contact barrier, which stiffens without bound: at steps
+//!   that do not resolve a landing on it, the fabric bounces off higher
+//!   than it fell (README, "Self-contact"); the default `beta` = 1,
+//!   `gamma` = 1.5 dissipates instead.
 
 use super::schedule::{DEFAULT_DT_MAX_FACTOR, END_TOLERANCE, REST_STEPS};
 use crate::setup::{Analysis, Setup};
@@ -34,9 +40,25 @@ const BIAXIAL_COMPRESSION: [f64; 3] = [-0.01, -0.01, 0.0];
 pub fn warnings(setup: &Setup) -> Vec<String> {
     let mut out = Vec::new();
     tension_field_with_bending(setup, &mut out);
+    conservative_self_contact(setup, &mut out);
     rest_after_the_end(setup, &mut out);
     fast_obstacles(setup, &mut out);
     out
+}
+
+/// Self-contact with the trapezoidal rule (`gamma` below 0.6, where the
+/// scheme's numerical damping is too small to take up a landing on the
+/// barrier).
+fn conservative_self_contact(setup: &Setup, out: &mut Vec<String>) {
+    if let (Some(_), Analysis::Dynamic { newmark, .. }) =
+        (setup.model.self_contact(), &setup.analysis)
+        && newmark.gamma < 0.6
+    {
+        out.push(format!(
+            "time.gamma = {} with contact.self = true: the self-contact barrier stiffens without bound, and a Newmark scheme that does not dissipate can make the fabric bounce off it higher than it fell (README, \"Self-contact\"); beta = 1.0, gamma = 1.5 (the default) dissipates instead",
+            newmark.gamma
+        ));
+    }
 }
 
 /// A tension-field wrinkling model together with a bending rigidity.
