@@ -390,12 +390,10 @@ fn a_ply_on_a_ply_holds_below_the_friction_angle_and_slides_above() {
     assert!((a / expected - 1.0).abs() < 0.02, "{a} vs {expected}");
 }
 
-/// The dissipation of friction between the layers reaches the history:
-/// `friction_dissipation` never decreases and grows while the ply slides.
-#[test]
-fn friction_between_layers_dissipates() {
-    let text = ply_on_ply(35f64.to_radians(), 0.4, 60);
-    let dir = common::temp_dir("self-friction");
+/// Runs scenario `text` (written into a temporary directory named after
+/// `name`) and returns its `history.csv`.
+fn history_of(text: &str, name: &str) -> (Vec<String>, Vec<Vec<f64>>) {
+    let dir = common::temp_dir(name);
     let path = dir.join("s.toml");
     std::fs::write(&path, &text).unwrap();
     let (scenario, source) = drape::scenario::Scenario::read(&path).unwrap();
@@ -403,6 +401,15 @@ fn friction_between_layers_dissipates() {
     let out = dir.join("out");
     drape::simulation::run(&s, &out, &mut |_| {}).expect("runs");
     let (header, rows) = common::read_history(&out);
+    (header, rows)
+}
+
+/// The dissipation of friction between the layers reaches the history:
+/// `friction_dissipation` never decreases and grows while the ply slides.
+#[test]
+fn friction_between_layers_dissipates() {
+    let text = ply_on_ply(35f64.to_radians(), 0.4, 60);
+    let (header, rows) = history_of(&text, "self-friction");
     let d = common::column(&header, &rows, "friction_dissipation");
     assert!(d.windows(2).all(|w| w[1] >= w[0]), "{d:?}");
     assert!(*d.last().unwrap() > 1e-6, "{d:?}");
@@ -420,14 +427,7 @@ fn friction_between_layers_dissipates() {
 #[test]
 fn energy_never_increases_through_a_landing() {
     let text = ply_on_ply(0.0, 0.0, 100);
-    let dir = common::temp_dir("self-energy");
-    let path = dir.join("s.toml");
-    std::fs::write(&path, &text).unwrap();
-    let (scenario, source) = drape::scenario::Scenario::read(&path).unwrap();
-    let s = scenario.build(&path, &source).unwrap();
-    let out = dir.join("out");
-    drape::simulation::run(&s, &out, &mut |_| {}).expect("runs");
-    let (header, rows) = common::read_history(&out);
+    let (header, rows) = history_of(&text, "self-energy");
     let e = common::column(&header, &rows, "total_energy");
     let k = common::column(&header, &rows, "kinetic_energy");
     let c = common::column(&header, &rows, "contact_energy");
