@@ -245,6 +245,18 @@ fn check(path: &Path) -> Result<(), Failure> {
     };
     println!("  mass      {:.6e} kg ({mass_kind})", m.total_mass());
     println!("  loads     {}", m.loads().len());
+    if let Some(sc) = m.self_contact() {
+        let friction = if sc.friction() > 0.0 {
+            format!("friction {} between the layers", human(sc.friction()))
+        } else {
+            "frictionless".into()
+        };
+        println!(
+            "  self      self-contact on {} triangles, its barrier within {} m, {friction}",
+            sc.triangles().len(),
+            human(sc.distance())
+        );
+    }
     match &setup.analysis {
         drape::setup::Analysis::Dynamic { newmark, segments } => {
             let steps: usize = segments.iter().map(|s| s.0).sum();
