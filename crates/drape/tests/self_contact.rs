@@ -395,7 +395,7 @@ fn a_ply_on_a_ply_holds_below_the_friction_angle_and_slides_above() {
 fn history_of(text: &str, name: &str) -> (Vec<String>, Vec<Vec<f64>>) {
     let dir = common::temp_dir(name);
     let path = dir.join("s.toml");
-    std::fs::write(&path, &text).unwrap();
+    std::fs::write(&path, text).unwrap();
     let (scenario, source) = drape::scenario::Scenario::read(&path).unwrap();
     let s = scenario.build(&path, &source).unwrap();
     let out = dir.join("out");
@@ -416,9 +416,9 @@ fn friction_between_layers_dissipates() {
 }
 
 /// The 6 cm ply dropped 0.5 mm onto the held one, frictionless, with the
-/// default dissipative Newmark (β = 1, γ = 1.5): `total_energy` (kinetic
-/// + strain + contact, the barrier's included, − the work of the loads)
-/// never increases from a step to the next (beyond Newton's tolerance),
+/// default dissipative Newmark (β = 1, γ = 1.5): `total_energy` (the
+/// kinetic, strain and contact energies, the barrier's included, less the
+/// work of the loads) never increases from a step to the next (beyond Newton's tolerance),
 /// the barrier's energy shows in `contact_energy`, and the ply comes to
 /// rest. (The trapezoidal rule, β = 0.25, γ = 0.5, does not conserve
 /// energy through this landing at steps of 0.1–0.2 ms, which do not

@@ -283,9 +283,46 @@ pub fn pair_barrier(
     kappa: f64,
     hessian: Hessian,
 ) -> Option<(f64, [f64; 12], Option<[f64; 144]>)> {
+    pair_barrier_mollified(kind, x, s_hat, kappa, hessian, None)
+}
+
+/// [`pair_barrier`] with, for an edge–edge pair, the barrier multiplied by
+/// [`edge_mollifier`] of `eps` where it is below 1 (the product's
+/// gradient and Hessian; its projection on the whole 12 x 12 then).
+pub fn pair_barrier_mollified(
+    kind: PairKind,
+    x: &[[f64; 3]; 4],
+    s_hat: f64,
+    kappa: f64,
+    hessian: Hessian,
+    eps: Option<f64>,
+) -> Option<(f64, [f64; 12], Option<[f64; 144]>)> {
     let s = kind.closest(x).d2;
     if s >= s_hat {
         return None;
+    }
+    if let (PairKind::EdgeEdge, Some(eps)) = (kind, eps) {
+        let (m, gm, hm) = edge_mollifier(x, eps);
+        if m < 1.0 {
+            let which = if hessian == Hessian::None {
+                Hessian::None
+            } else {
+                Hessian::Exact
+            };
+            let (e, g, h) = pair_barrier_mollified(kind, x, s_hat, kappa, which, None)?;
+            let grad: [f64; 12] = std::array::from_fn(|k| e * gm[k] + m * g[k]);
+            let hess = h.map(|h| {
+                let mut out: [f64; 144] = std::array::from_fn(|k| {
+                    let (p, q) = (k / 12, k % 12);
+                    e * hm[k] + gm[p] * g[q] + g[p] * gm[q] + m * h[k]
+                });
+                if hessian == Hessian::Projected {
+                    crate::psd::project(&mut out, 12, 12);
+                }
+                out
+            });
+            return Some((m * e, grad, hess));
+        }
     }
     let mut span = Vec::new();
     let (ds, dh) = if hessian != Hessian::None {
@@ -312,6 +349,59 @@ pub fn pair_barrier(
         out
     });
     Some((kappa * b, grad, hess))
+}
+
+/// IPC's edge–edge mollifier (Li et al. 2020, §4.3): with `a = x1 - x0`,
+/// `b = x3 - x2` and `c = |a × b|^2`,
+///
+/// ```text
+/// m(c) = -c^2 / eps^2 + 2 c / eps   for c < eps,   else 1
+/// ```
+///
+/// (`eps = 1e-3 |a_0|^2 |b_0|^2` from the rest lengths): the edge–edge
+/// barrier is multiplied by `m`, which vanishes with the cross product, so
+/// that two edges turning parallel — where their closest points jump and
+/// the distance is only C⁰ — feel a barrier that goes smoothly to zero
+/// (the point–triangle pairs of their ends hold them apart there).
+/// Returns `m`, its gradient and its Hessian in the four nodes.
+pub fn edge_mollifier(x: &[[f64; 3]; 4], eps: f64) -> (f64, [f64; 12], [f64; 144]) {
+    let a = sub(x[1], x[0]);
+    let b = sub(x[3], x[2]);
+    let (aa, bb, ab) = (dot(a, a), dot(b, b), dot(a, b));
+    let c = aa * bb - ab * ab;
+    if c >= eps {
+        return (1.0, [0.0; 12], [0.0; 144]);
+    }
+    let m = -c * c / (eps * eps) + 2.0 * c / eps;
+    let m1 = -2.0 * c / (eps * eps) + 2.0 / eps;
+    let m2 = -2.0 / (eps * eps);
+    // ∇c in (a, b), then in the nodes (a = x1 - x0, b = x3 - x2).
+    let ga: [f64; 3] = std::array::from_fn(|i| 2.0 * bb * a[i] - 2.0 * ab * b[i]);
+    let gb: [f64; 3] = std::array::from_fn(|i| 2.0 * aa * b[i] - 2.0 * ab * a[i]);
+    let sign = [-1.0, 1.0, -1.0, 1.0];
+    let gc: [f64; 12] = std::array::from_fn(|k| {
+        let (node, i) = (k / 3, k % 3);
+        sign[node] * if node < 2 { ga[i] } else { gb[i] }
+    });
+    // ∇²c in (a, b): Haa = 2|b|² I - 2 b bᵀ, Hbb = 2|a|² I - 2 a aᵀ,
+    // Hab = 4 a bᵀ - 2 b aᵀ - 2 (a.b) I.
+    let delta = |i: usize, j: usize| f64::from(u8::from(i == j));
+    let hc = |p: usize, q: usize| -> f64 {
+        let (np, i, nq, j) = (p / 3, p % 3, q / 3, q % 3);
+        let v = match (np < 2, nq < 2) {
+            (true, true) => 2.0 * bb * delta(i, j) - 2.0 * b[i] * b[j],
+            (false, false) => 2.0 * aa * delta(i, j) - 2.0 * a[i] * a[j],
+            (true, false) => 4.0 * a[i] * b[j] - 2.0 * b[i] * a[j] - 2.0 * ab * delta(i, j),
+            (false, true) => 4.0 * a[j] * b[i] - 2.0 * b[j] * a[i] - 2.0 * ab * delta(i, j),
+        };
+        sign[np] * sign[nq] * v
+    };
+    let g = gc.map(|v| m1 * v);
+    let h: [f64; 144] = std::array::from_fn(|k| {
+        let (p, q) = (k / 12, k % 12);
+        m2 * gc[p] * gc[q] + m1 * hc(p, q)
+    });
+    (m, g, h)
 }
 
 /// Which Hessian [`pair_barrier`] gives.
@@ -612,6 +702,88 @@ mod tests {
             }
         }
         assert!(changed > 50, "{changed}");
+    }
+
+    /// Two nearly parallel edges closer than `d̂`: the mollifier's and the
+    /// mollified barrier's gradient and Hessian against central
+    /// differences; the mollifier is 1 for crossing edges and goes to 0 as
+    /// the edges turn parallel.
+    #[test]
+    fn mollified_edge_barrier_matches_finite_differences() {
+        let x = [
+            [0.0, 0.0, 0.0],
+            [1e-2, 0.0, 0.0],
+            [2e-3, 1e-5, 5e-4],
+            [1.2e-2, 4e-5, 4e-4],
+        ];
+        let eps = 1e-3 * 1e-4 * 1e-4;
+        let flat: Vec<f64> = x.concat();
+        let (m, _, _) = edge_mollifier(&x, eps);
+        assert!(m > 0.0 && m < 1.0, "{m}");
+        let mf = |v: &[f64]| edge_mollifier(&nodes(v), eps).0;
+        let mg = |v: &[f64]| edge_mollifier(&nodes(v), eps).1.to_vec();
+        let mh = |v: &[f64]| edge_mollifier(&nodes(v), eps).2.to_vec();
+        assert!(gradient_error(mf, mg, &flat, 1e-9) < 1e-5);
+        assert!(jacobian_error(mg, mh, &flat, 1e-9) < 1e-5);
+        let s_hat = 1e-6;
+        let e = |v: &[f64]| {
+            pair_barrier_mollified(
+                PairKind::EdgeEdge,
+                &nodes(v),
+                s_hat,
+                1e6,
+                Hessian::None,
+                Some(eps),
+            )
+            .unwrap()
+            .0
+        };
+        let g = |v: &[f64]| {
+            pair_barrier_mollified(
+                PairKind::EdgeEdge,
+                &nodes(v),
+                s_hat,
+                1e6,
+                Hessian::None,
+                Some(eps),
+            )
+            .unwrap()
+            .1
+            .to_vec()
+        };
+        let h = |v: &[f64]| {
+            pair_barrier_mollified(
+                PairKind::EdgeEdge,
+                &nodes(v),
+                s_hat,
+                1e6,
+                Hessian::Exact,
+                Some(eps),
+            )
+            .unwrap()
+            .2
+            .unwrap()
+            .to_vec()
+        };
+        let (eg, eh) = (
+            gradient_error(e, g, &flat, 1e-10),
+            jacobian_error(g, h, &flat, 1e-10),
+        );
+        assert!(eg < 1e-5 && eh < 1e-4, "gradient {eg:e}, Hessian {eh:e}");
+        let crossing = [
+            [0.0, 0.0, 0.0],
+            [1e-2, 0.0, 0.0],
+            [5e-3, -5e-3, 5e-4],
+            [5e-3, 5e-3, 5e-4],
+        ];
+        assert_eq!(edge_mollifier(&crossing, eps).0, 1.0);
+        let parallel = [
+            [0.0, 0.0, 0.0],
+            [1e-2, 0.0, 0.0],
+            [2e-3, 0.0, 5e-4],
+            [1.2e-2, 0.0, 5e-4],
+        ];
+        assert_eq!(edge_mollifier(&parallel, eps).0, 0.0);
     }
 
     /// A node falling onto a triangle stops short of it: the fraction ACCD

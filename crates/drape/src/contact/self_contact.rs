@@ -14,6 +14,13 @@
 //! Pairs sharing a node are not pairs; the initial mesh must have no
 //! other pair closer than `d̂` ([`SelfContact::new`] says which).
 //!
+//! **Parallel edges.** An edge–edge pair's barrier is multiplied by IPC's
+//! mollifier of the edges' cross product
+//! ([`super::barrier::edge_mollifier`], its scale from the rest lengths),
+//! which takes it smoothly to zero as the edges turn parallel, where the
+//! edge–edge distance is only continuous; the point–triangle pairs of
+//! their ends hold such edges apart.
+//!
 //! **Hessian.** Each pair's 12 x 12 Hessian is projected to its positive
 //! semi-definite part ([`crate::psd`]; exact where it already is) and
 //! scattered into a pattern: the stepper's layout grown with the pairs
@@ -50,7 +57,7 @@
 //! whose barrier is infinite is rejected, so every accepted iterate keeps
 //! every pair apart.
 
-use super::barrier::{Hessian, PairKind, additive_ccd, box_separation, pair_barrier};
+use super::barrier::{Hessian, PairKind, additive_ccd, box_separation, pair_barrier_mollified};
 use super::proximity::{Candidates, close_pairs, edges_of, swept_candidates};
 use crate::solver::SparsePattern;
 use crate::vec3::norm;
@@ -77,6 +84,8 @@ pub struct SelfContact {
     friction: f64,
     /// The slip speed below which that friction is viscous (m/s).
     stick_speed: f64,
+    /// Each edge's squared rest length (m²): the mollifier's scale.
+    rest_length2: Vec<f64>,
 }
 
 /// The broad phase's pairs at positions `at`: every pair closer than
@@ -129,7 +138,14 @@ impl SelfContact {
         eta: f64,
     ) -> Result<Self, TooClose> {
         let edges = edges_of(&triangles);
+        let rest_length2 = (edges.iter())
+            .map(|&[a, b]| {
+                let d: [f64; 3] = std::array::from_fn(|i| x[3 * a + i] - x[3 * b + i]);
+                d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+            })
+            .collect();
         let s = Self {
+            rest_length2,
             triangles,
             edges,
             distance,
@@ -171,6 +187,13 @@ impl SelfContact {
     /// `d̂` (m).
     pub fn distance(&self) -> f64 {
         self.distance
+    }
+
+    /// The edge–edge mollifier's `eps` of pair `(e, k)` of edges:
+    /// `1e-3 |a_0|^2 |b_0|^2` from their rest lengths
+    /// ([`super::barrier::edge_mollifier`]); `None` for point–triangle pairs.
+    fn mollifier_eps(&self, kind: PairKind, a: usize, b: usize) -> Option<f64> {
+        (kind == PairKind::EdgeEdge).then(|| 1e-3 * self.rest_length2[a] * self.rest_length2[b])
     }
 
     /// The triangles measured.
@@ -294,7 +317,10 @@ impl SelfContact {
             } else {
                 Hessian::None
             };
-            let Some((e, grad, hess)) = pair_barrier(kind, &pos, s_hat, self.kappa, which) else {
+            let eps = self.mollifier_eps(kind, a, b);
+            let Some((e, grad, hess)) =
+                pair_barrier_mollified(kind, &pos, s_hat, self.kappa, which, eps)
+            else {
                 continue;
             };
             value += e;
@@ -331,8 +357,9 @@ impl SelfContact {
         self.for_close_pairs(&x, |kind, pos, a, b| pairs.push((kind, pos, a, b)));
         for (kind, pos, a, b) in pairs {
             let nodes = self.nodes(kind, a, b);
+            let eps = self.mollifier_eps(kind, a, b);
             if let Some((e, _, Some(k))) =
-                pair_barrier(kind, &pos, s_hat, self.kappa, Hessian::Projected)
+                pair_barrier_mollified(kind, &pos, s_hat, self.kappa, Hessian::Projected, eps)
                 && e.is_finite()
             {
                 scatter(&k, &nodes, values, pattern, Some(fixed));
@@ -355,12 +382,16 @@ impl SelfContact {
             });
             let d = norm(r);
             let (_, b1, _) = super::barrier::barrier(c.d2, s_hat);
-            if d > 0.0 && b1.is_finite() {
+            // A mollified edge pair presses by its mollified force.
+            let m = self
+                .mollifier_eps(kind, a, b)
+                .map_or(1.0, |eps| super::barrier::edge_mollifier(&pos, eps).0);
+            if d > 0.0 && b1.is_finite() && m > 0.0 {
                 out.push(LaggedPair {
                     nodes: self.nodes(kind, a, b),
                     weights: c.weights,
                     normal: crate::vec3::scale(r, 1.0 / d),
-                    force: mu * self.kappa * (-b1) * 2.0 * d,
+                    force: mu * m * self.kappa * (-b1) * 2.0 * d,
                 });
             }
         });
