@@ -92,6 +92,29 @@ def test_check_counts_the_pieces_of_a_mesh():
     assert (info["elements"], info["pieces"]) == (324, 2)
 
 
+def test_self_contact_from_a_dict_keeps_two_plies_apart(tmp_path):
+    # Issue 33's two plies dropped onto the pedestal with `self = True`
+    # from a dict: the upper ply lands on the lower one and stays at
+    # least self_distance / 2 above it where they overlap.
+    plies = pedestal(
+        **{
+            "mesh": {"shape": "file", "path": str(REPO / "crates/drape/tests/meshes/two-plies-t3.msh")},
+            "contact.self": True,
+            "contact.self_distance": 2.0e-3,
+            "time.segments": [{"steps": 140, "dt": 1.0e-3}],
+            "output.every": 50,
+        }
+    )
+    plies.pop("monitor", None)
+    result = drape.run(plies, out=tmp_path / "plies")
+    assert result.summary["status"] == "completed"
+    start = drape.RunResult(tmp_path / "plies").positions(step=0)
+    end = result.positions()
+    centre = lambda z: int(np.argmin(np.hypot(start[:, 0], start[:, 1]) + 10.0 * np.abs(start[:, 2] - z)))
+    lower, upper = centre(0.0), centre(0.01)
+    assert end[upper, 2] - end[lower, 2] >= 1.0e-3, (end[upper], end[lower])
+
+
 def test_the_result_reads_the_outputs(tmp_path):
     info = drape.check(short_pedestal())
     res = drape.run(short_pedestal(), out=tmp_path / "run")
