@@ -249,6 +249,14 @@ impl SelfContact {
         });
     }
 
+    /// Forgets the kept broad phase: called at the start of every step
+    /// (each attempt), so that what a step computes depends on the step's
+    /// start alone and a resumed run takes the same steps as an
+    /// uninterrupted one.
+    pub fn forget_broad_phase(&self) {
+        *self.kept.lock().unwrap_or_else(|e| e.into_inner()) = Kept::default();
+    }
+
     /// Calls `f` with a superset of the pairs that come closer than `d̂`
     /// at `x` or anywhere within `reach` of it (the pairs closer than a
     /// margin, measured when it was made): the kept broad phase when

@@ -29,10 +29,10 @@
 //!   (the kept multigrid hierarchy and `reuse`'s factor are made for the
 //!   model's pattern); those keep the diagonal treatment.
 //!
-//! A resumed run starts with the model's layout and grows it again from
-//! the checkpoint's state, so it need not factorise on the same pattern
-//! as the uninterrupted run: a resumed self-contact run is not promised
-//! to be bit-identical.
+//! A checkpoint keeps the stencils the layout was built from (format 7),
+//! and a resumed run builds the same layout from them
+//! ([`restore`]): it factorises on the same pattern as the uninterrupted
+//! run, and ends with the same bytes (tests/self_contact.rs).
 
 use crate::model::Model;
 use crate::solver::newton::NewtonWorkspace;
@@ -56,6 +56,8 @@ pub struct Grown {
     pub(crate) map: Vec<usize>,
     /// The Hessian's values on the model's pattern, before the copy.
     pub(crate) model_values: Vec<f64>,
+    /// The pair stencils it was built from.
+    stencils: Vec<[usize; 4]>,
     /// The node couplings (`a < b`) they add.
     coupled: HashSet<(usize, usize)>,
     /// How many times the layout was built.
@@ -93,8 +95,39 @@ pub(crate) fn grow(
     // Rebuilt from the pairs near now, with room: the layout follows the
     // contacts (folds and plies that part leave it at the next rebuild).
     let stencils = sc.stencils_near(y, ROOM * trigger);
-    let coupled: HashSet<(usize, usize)> = stencils.iter().flat_map(couplings).collect();
     let builds = grown.as_ref().map_or(0, |g| g.builds);
+    build(model, grown, ws, stencils, builds + 1)
+}
+
+/// Builds `grown` from `stencils` (a checkpoint's: the layout the run had
+/// when it stopped) and rebinds `ws` to it: a resumed run factorises on
+/// the same pattern as the uninterrupted one. Nothing for no stencils.
+pub(crate) fn restore(
+    model: &Model,
+    grown: &mut Option<Grown>,
+    ws: &mut NewtonWorkspace,
+    stencils: &[[usize; 4]],
+) -> Result<(), LinearSolveError> {
+    if stencils.is_empty() || !applies(model, ws.linear.effective_mode()) {
+        return Ok(());
+    }
+    build(model, grown, ws, stencils.to_vec(), 1)
+}
+
+/// The stencils `grown` was built from (none without a layout).
+pub(crate) fn stencils(grown: &Option<Grown>) -> Vec<[usize; 4]> {
+    grown.as_ref().map_or_else(Vec::new, |g| g.stencils.clone())
+}
+
+/// The layout of the model's pattern and `stencils`, `ws` rebound to it.
+fn build(
+    model: &Model,
+    grown: &mut Option<Grown>,
+    ws: &mut NewtonWorkspace,
+    stencils: Vec<[usize; 4]>,
+    builds: usize,
+) -> Result<(), LinearSolveError> {
+    let coupled: HashSet<(usize, usize)> = stencils.iter().flat_map(couplings).collect();
     let base = model.pattern();
     let mesh = model.mesh();
     let pattern = match model.bending() {
@@ -133,8 +166,9 @@ pub(crate) fn grow(
         pattern,
         map,
         model_values: vec![0.0; base.nnz()],
+        stencils,
         coupled,
-        builds: builds + 1,
+        builds,
     });
     Ok(())
 }

@@ -369,6 +369,9 @@ pub(crate) fn solve_step(
     grown: &mut Option<grown::Grown>,
 ) -> Result<(NewtonReport, StepEnergies), NewtonError> {
     let saved = contact.clone();
+    if let Some(sc) = model.self_contact() {
+        sc.forget_broad_phase();
+    }
     feasible_guess(model, y, terms.start.map(|s| s.0));
     if grown::applies(model, ws.linear.effective_mode()) {
         grown::grow(model, grown, ws, y)?;

@@ -78,6 +78,25 @@ impl DynamicWorkspace {
         self.grown.as_ref().map_or(0, |g| g.builds)
     }
 
+    /// The stencils self-contact's grown Hessian layout was built from
+    /// (none without one): what a checkpoint keeps.
+    pub fn layout_stencils(&self) -> Vec<[usize; 4]> {
+        super::grown::stencils(&self.grown)
+    }
+
+    /// Builds self-contact's Hessian layout from a checkpoint's `stencils`
+    /// (nothing for none, or without self-contact).
+    ///
+    /// # Errors
+    /// The linear solver cannot be made for the layout's pattern.
+    pub fn restore_layout(
+        &mut self,
+        model: &Model,
+        stencils: &[[usize; 4]],
+    ) -> Result<(), crate::solver::LinearSolveError> {
+        super::grown::restore(model, &mut self.grown, &mut self.newton, stencils)
+    }
+
     /// Buffers for `model`, with direct linear solves.
     pub fn new(model: &Model) -> Result<Self, crate::solver::LinearSolveError> {
         Self::with_mode(model, crate::solver::LinearMode::Direct)

@@ -1,7 +1,7 @@
 //! Checkpoints: the full state of a run in a versioned binary file, to
 //! resume from (`drape run --resume DIR`).
 //!
-//! Format (little-endian), version 6:
+//! Format (little-endian), version 7:
 //!
 //! ```text
 //! magic "DRAPECKP" · version u32 · scenario hash u64
@@ -24,6 +24,9 @@
 //!          then [values u64 and that many f64], fresh iterations, last iterations, skipped solves (u64 each);
 //!        reuse factor u8 (0: none, 1: of a symmetric matrix, 2: of its symmetric part),
 //!          then values u64 and that many f64
+//! self-contact's Hessian layout (version 7): stencils u64, then 4 node
+//!        indices (u64 each) per stencil — the pairs the stepper's grown
+//!        layout was built from (`integrator::grown`; none without it)
 //! FNV-1a of everything before, u64
 //! ```
 //!
@@ -32,6 +35,9 @@
 //! changed, naming it. A path is kept as the bytes of the operating
 //! system's string (Unix), so that any path survives.
 //!
+//! Version 6 (drape before self-contact's layout) is read with no layout:
+//! a run without self-contact resumes bit for bit, one with it grows its
+//! layout again at its first step.
 //! Version 5 (drape before the kept linear-solver state) is read with
 //! none kept: a `direct` run, which keeps nothing across steps, resumes
 //! bit for bit, an `iterative` or `reuse` one with a fresh preconditioner.
@@ -64,7 +70,7 @@ use crate::solver::{KeptFactor, KeptLinear, KeptMultigrid, LinearStats};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"DRAPECKP";
-const VERSION: u32 = 6;
+const VERSION: u32 = 7;
 
 /// Longest key of an input file (bytes).
 const MAX_KEY_BYTES: usize = 256;
@@ -143,6 +149,10 @@ pub struct Checkpoint {
     /// an older checkpoint): a resumed `iterative` or `reuse` run rebuilds
     /// the same preconditioner from it.
     pub kept_linear: KeptLinear,
+    /// The four-node stencils self-contact's grown Hessian layout was
+    /// built from (version 7; empty without one): a resumed run builds the
+    /// same layout, so that it factorises on the same pattern.
+    pub self_contact_layout: Vec<[usize; 4]>,
 }
 
 /// A checkpoint that cannot be used.
@@ -298,6 +308,12 @@ impl Checkpoint {
             b.extend_from_slice(&(*step as u64).to_le_bytes());
         }
         write_kept(&mut b, &self.kept_linear);
+        b.extend_from_slice(&(self.self_contact_layout.len() as u64).to_le_bytes());
+        for stencil in &self.self_contact_layout {
+            for a in stencil {
+                b.extend_from_slice(&(*a as u64).to_le_bytes());
+            }
+        }
         let hash = fnv1a(&b);
         b.extend_from_slice(&hash.to_le_bytes());
         b
@@ -467,6 +483,31 @@ impl Checkpoint {
         } else {
             KeptLinear::default()
         };
+        let self_contact_layout = if version >= 7 {
+            let count = r.usize("layout stencils")?;
+            if count > r.remaining() / 32 {
+                return Err(invalid(format!(
+                    "layout stencil count {count} beyond the file"
+                )));
+            }
+            let nodes = expected.dofs / 3;
+            (0..count)
+                .map(|_| {
+                    let mut s = [0; 4];
+                    for a in &mut s {
+                        *a = r.usize("layout stencil node")?;
+                        if *a >= nodes {
+                            return Err(invalid(format!(
+                                "layout stencil node {a} beyond the mesh's {nodes} nodes"
+                            )));
+                        }
+                    }
+                    Ok(s)
+                })
+                .collect::<Result<Vec<_>, CheckpointError>>()?
+        } else {
+            Vec::new()
+        };
         if r.remaining() != 0 {
             return Err(invalid(format!("{} trailing bytes", r.remaining())));
         }
@@ -487,6 +528,7 @@ impl Checkpoint {
             external_forces,
             frames,
             kept_linear,
+            self_contact_layout,
         };
         ck.check_values()?;
         Ok(ck)
@@ -1065,7 +1107,18 @@ mod tests {
                     symmetric: false,
                 }),
             },
+            self_contact_layout: if contact {
+                vec![[0, 1, 1, 0]]
+            } else {
+                Vec::new()
+            },
         }
+    }
+
+    /// The bytes of `c`'s self-contact layout (version 7), last before the
+    /// checksum.
+    fn layout_len(c: &Checkpoint) -> usize {
+        8 + 32 * c.self_contact_layout.len()
     }
 
     fn bodies(c: &Checkpoint) -> usize {
@@ -1133,9 +1186,13 @@ mod tests {
     /// persistence too).
     fn as_version(c: &Checkpoint, version: u32) -> Vec<u8> {
         let bytes = c.to_bytes();
+        let v6 = bytes.len() - 8 - layout_len(c);
+        if version == 6 {
+            return seal(bytes[..v6].to_vec(), 6);
+        }
         let mut kept = Vec::new();
         write_kept(&mut kept, &c.kept_linear);
-        let v5 = seal(bytes[..bytes.len() - 8 - kept.len()].to_vec(), 5);
+        let v5 = seal(bytes[..v6 - kept.len()].to_vec(), 5);
         if version == 5 {
             return v5;
         }
@@ -1183,16 +1240,21 @@ mod tests {
         seal(old, version)
     }
 
-    /// Version 5 resumes with nothing kept by the linear solver; version 4
+    /// Version 6 resumes with no self-contact layout; version 5 with
+    /// nothing kept by the linear solver; version 4
     /// with no friction dissipated; version 3 without
     /// input files (unchecked); versions 1 and 2
     /// with 0 for the adaptive steps' segment and step size and the rest
     /// criterion's still steps (a fixed schedule's values), version 1 with
     /// the persistence 1 (the predictor it was written with).
     #[test]
-    fn reads_versions_1_to_5_with_defaults_for_the_new_fields() {
+    fn reads_versions_1_to_6_with_defaults_for_the_new_fields() {
         let c = sample(true);
         let mut expected = c.clone();
+        // Version 6: no self-contact layout.
+        expected.self_contact_layout = Vec::new();
+        let v6 = Checkpoint::from_bytes(&as_version(&c, 6), 6, 2, 0xdead_beef).unwrap();
+        assert_eq!(v6, expected);
         // Version 5: nothing kept by the linear solver.
         expected.kept_linear = KeptLinear::default();
         let v5 = Checkpoint::from_bytes(&as_version(&c, 5), 6, 2, 0xdead_beef).unwrap();
@@ -1323,11 +1385,11 @@ mod tests {
         // A later version is refused by name.
         let mut later = sample(true).to_bytes();
         later.truncate(later.len() - 8);
-        let later = seal(later, 7);
+        let later = seal(later, 8);
         let e = Checkpoint::from_bytes(&later, 6, 2, 0xdead_beef).unwrap_err();
         assert!(
             e.to_string()
-                .contains("version 7, this drape reads versions 1 to 6"),
+                .contains("version 8, this drape reads versions 1 to 7"),
             "{e}"
         );
     }
@@ -1362,9 +1424,19 @@ mod tests {
         // The kept linear-solver state, last before the checksum: the
         // multigrid flag, its matrix's length and values, its 3 counters;
         // the factor's flag, length and values.
+        // The self-contact layout, last: a node beyond the mesh's two.
+        let layout_at = bytes.len() - 8 - layout_len(&c);
+        says(
+            &forge(layout_at + 8 + 8, &7u64.to_le_bytes()),
+            "layout stencil node 7 beyond the mesh's 2 nodes",
+        );
+        says(
+            &forge(layout_at, &u64::MAX.to_le_bytes()),
+            "layout stencil count 18446744073709551615 beyond the file",
+        );
         let mut kept = Vec::new();
         write_kept(&mut kept, &c.kept_linear);
-        let kept_at = bytes.len() - 8 - kept.len();
+        let kept_at = layout_at - kept.len();
         says(&forge(kept_at, &[3]), "multigrid flag 3 is not 0, 1 or 2");
         says(
             &forge(kept_at + 1 + 8, &f64::NAN.to_le_bytes()),

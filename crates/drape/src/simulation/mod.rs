@@ -673,6 +673,7 @@ impl Stepper<'_, '_> {
             external_forces: self.ws.f_ext.clone(),
             frames: self.written.clone(),
             kept_linear: self.ws.newton.linear.kept(),
+            self_contact_layout: self.ws.layout_stencils(),
         };
         let path = checkpoint_path(self.out);
         write_atomic(&path, &ck.to_bytes()).map_err(io_err(&path))

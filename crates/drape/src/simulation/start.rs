@@ -201,6 +201,16 @@ pub(super) fn resume<'a>(
             "its kept linear-solver state (the matrix a preconditioner was made from) does not fit the scenario's Hessian, or cannot be factorised again".into(),
         )));
     }
+    // Self-contact's Hessian layout as it was: the same pattern, the same
+    // factorisations.
+    if ws
+        .restore_layout(&setup.model, &ck.self_contact_layout)
+        .is_err()
+    {
+        return Err(unusable(CheckpointError::Invalid(
+            "its self-contact layout cannot be factorised on this model".into(),
+        )));
+    }
     let entries = ck
         .frames
         .iter()
