@@ -316,9 +316,12 @@ fn as_version_3(bytes: &[u8]) -> Vec<u8> {
         }
         at += 8;
     }
-    // Version 6's kept linear-solver state ends the body: a direct solve
+    // Version 7's self-contact layout ends the body (none here: a count
+    // of 0), after version 6's kept linear-solver state: a direct solve
     // keeps nothing, its two flags 0.
-    let kept = bytes.len() - 8 - 2;
+    let layout = bytes.len() - 8 - 8;
+    assert_eq!(bytes[layout..layout + 8], [0; 8], "no self-contact layout");
+    let kept = layout - 2;
     assert_eq!(bytes[kept..kept + 2], [0, 0], "a direct run keeps nothing");
     let mut body = bytes[..inputs].to_vec();
     body.extend_from_slice(&bytes[at..kept]);
