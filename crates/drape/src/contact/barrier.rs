@@ -102,7 +102,7 @@ impl PairKind {
 /// The squared distance `s`, its gradient (12, node-major) and Hessian
 /// (12 x 12, row-major) at `x` (module docs).
 pub fn squared_distance(kind: PairKind, x: &[[f64; 3]; 4]) -> (f64, [f64; 12], [f64; 144]) {
-    let (s, g, h, _) = distance_parts(kind, x);
+    let (s, g, h, _) = distance_parts(kind, x, &kind.closest(x));
     (s, g, h)
 }
 
@@ -113,8 +113,8 @@ pub fn squared_distance(kind: PairKind, x: &[[f64; 3]; 4]) -> (f64, [f64; 12], [
 fn distance_parts(
     kind: PairKind,
     x: &[[f64; 3]; 4],
+    c: &Closest,
 ) -> (f64, [f64; 12], [f64; 144], Vec<[f64; 12]>) {
-    let c = kind.closest(x);
     let w = c.weights;
     let r = (0..4).fold([0.0; 3], |acc, i| add(acc, scale(x[i], w[i])));
     let mut g = [0.0; 12];
@@ -297,7 +297,21 @@ pub fn pair_barrier_mollified(
     hessian: Hessian,
     eps: Option<f64>,
 ) -> Option<(f64, [f64; 12], Option<[f64; 144]>)> {
-    let s = kind.closest(x).d2;
+    barrier_of(kind, x, &kind.closest(x), s_hat, kappa, hessian, eps)
+}
+
+/// [`pair_barrier_mollified`] with the pair's closest points `c` already
+/// found (the narrow phase finds them to tell whether the pair is near).
+pub fn barrier_of(
+    kind: PairKind,
+    x: &[[f64; 3]; 4],
+    c: &Closest,
+    s_hat: f64,
+    kappa: f64,
+    hessian: Hessian,
+    eps: Option<f64>,
+) -> Option<(f64, [f64; 12], Option<[f64; 144]>)> {
+    let s = c.d2;
     if s >= s_hat {
         return None;
     }
@@ -309,7 +323,7 @@ pub fn pair_barrier_mollified(
             } else {
                 Hessian::Exact
             };
-            let (e, g, h) = pair_barrier_mollified(kind, x, s_hat, kappa, which, None)?;
+            let (e, g, h) = barrier_of(kind, x, c, s_hat, kappa, which, None)?;
             let grad: [f64; 12] = std::array::from_fn(|k| e * gm[k] + m * g[k]);
             let hess = h.map(|h| {
                 let mut out: [f64; 144] = std::array::from_fn(|k| {
@@ -326,11 +340,10 @@ pub fn pair_barrier_mollified(
     }
     let mut span = Vec::new();
     let (ds, dh) = if hessian != Hessian::None {
-        let (_, g, h, basis) = distance_parts(kind, x);
+        let (_, g, h, basis) = distance_parts(kind, x, c);
         span = basis;
         (g, Some(h))
     } else {
-        let c = kind.closest(x);
         let gr = c.gradient(*x);
         (std::array::from_fn(|k| gr[k / 3][k % 3]), None)
     };

@@ -25,7 +25,7 @@
 //! semi-definite part ([`crate::psd`]; exact where it already is) and
 //! scattered into a pattern: the stepper's layout grown with the pairs
 //! that may touch (`integrator::grown`, [`SelfContact::stencils_near`],
-//! [`SelfContact::add_hessian`]), or the model's own. A pair whose nodes
+//! [`PairHessians::Collect`], [`scatter_hessians`]), or the model's own. A pair whose nodes
 //! are not coupled in the pattern has its off-diagonal block `K_ab` moved
 //! to the diagonal as `|K_ab|_F I` on both nodes, which keeps the sum
 //! positive semi-definite (`[[s I, -K], [-Kᵀ, s I]] ⪰ 0` for `s >= |K|_2`)
@@ -57,7 +57,8 @@
 //! whose barrier is infinite is rejected, so every accepted iterate keeps
 //! every pair apart.
 
-use super::barrier::{Hessian, PairKind, additive_ccd, box_separation, pair_barrier_mollified};
+use super::barrier::{Hessian, PairKind, additive_ccd, barrier_of, box_separation};
+use super::proximity::Closest;
 use super::proximity::{Candidates, close_pairs, edges_of, swept_candidates};
 use crate::solver::SparsePattern;
 use crate::vec3::norm;
@@ -204,8 +205,8 @@ impl SelfContact {
     /// The closest pair closer than `d̂` at `x`, with its distance.
     fn closest_pair(&self, x: &[[f64; 3]]) -> Option<(f64, String)> {
         let mut best: Option<(f64, String)> = None;
-        self.for_close_pairs(x, |kind, nodes, a, b| {
-            let d = kind.closest(&nodes).d2.sqrt();
+        self.for_close_pairs(x, |kind, _, c, a, b| {
+            let d = c.d2.sqrt();
             if best.as_ref().is_none_or(|(bd, _)| d < *bd) {
                 let what = match kind {
                     PairKind::PointTriangle => format!("node {a} and triangle {b}"),
@@ -224,27 +225,25 @@ impl SelfContact {
     fn for_close_pairs(
         &self,
         x: &[[f64; 3]],
-        mut f: impl FnMut(PairKind, [[f64; 3]; 4], usize, usize),
+        mut f: impl FnMut(PairKind, [[f64; 3]; 4], &Closest, usize, usize),
     ) {
         let d2 = self.distance * self.distance;
+        let mut near = |kind: PairKind, pos: [[f64; 3]; 4], a: usize, b: usize| {
+            if box_separation(kind, &pos) < self.distance {
+                let c = kind.closest(&pos);
+                if c.d2 < d2 {
+                    f(kind, pos, &c, a, b);
+                }
+            }
+        };
         self.with_candidates(x, 0.0, |pairs| {
             for &(p, t) in &pairs.point_triangle {
                 let [a, b, c] = self.triangles[t];
-                let pos = [x[p], x[a], x[b], x[c]];
-                if box_separation(PairKind::PointTriangle, &pos) < self.distance
-                    && PairKind::PointTriangle.closest(&pos).d2 < d2
-                {
-                    f(PairKind::PointTriangle, pos, p, t);
-                }
+                near(PairKind::PointTriangle, [x[p], x[a], x[b], x[c]], p, t);
             }
             for &(e, k) in &pairs.edge_edge {
                 let ([a, b], [c, d]) = (self.edges[e], self.edges[k]);
-                let pos = [x[a], x[b], x[c], x[d]];
-                if box_separation(PairKind::EdgeEdge, &pos) < self.distance
-                    && PairKind::EdgeEdge.closest(&pos).d2 < d2
-                {
-                    f(PairKind::EdgeEdge, pos, e, k);
-                }
+                near(PairKind::EdgeEdge, [x[a], x[b], x[c], x[d]], e, k);
             }
         });
     }
@@ -304,75 +303,50 @@ impl SelfContact {
     /// The number of pairs closer than `d̂` at `y` (a report).
     pub fn active_pairs(&self, y: &[f64]) -> usize {
         let mut n = 0;
-        self.for_close_pairs(&points(y), |_, _, _, _| n += 1);
+        self.for_close_pairs(&points(y), |_, _, _, _, _| n += 1);
         n
     }
 
-    /// Adds the barrier's gradient to `g` and, with `h`, its projected
-    /// Hessian to the values on `pattern` (module docs); returns its value
-    /// (infinite where a pair touches).
-    pub fn add(&self, y: &[f64], g: &mut [f64], h: Option<(&mut [f64], &SparsePattern)>) -> f64 {
+    /// Adds the barrier's gradient to `g` and, as `hessians` says, its
+    /// projected Hessian (module docs); returns its value (infinite where
+    /// a pair touches).
+    pub fn add(&self, y: &[f64], g: &mut [f64], hessians: PairHessians<'_>) -> f64 {
         let x = points(y);
-        let mut value = 0.0;
-        let mut h = h;
         let s_hat = self.distance * self.distance;
-        let mut pairs = Vec::new();
-        self.for_close_pairs(&x, |kind, pos, a, b| pairs.push((kind, pos, a, b)));
-        for (kind, pos, a, b) in pairs {
-            let nodes = self.nodes(kind, a, b);
-            let which = if h.is_some() {
-                Hessian::Projected
-            } else {
-                Hessian::None
-            };
+        let which = match hessians {
+            PairHessians::None => Hessian::None,
+            _ => Hessian::Projected,
+        };
+        let mut hessians = hessians;
+        if let PairHessians::Collect(list) = &mut hessians {
+            list.clear();
+        }
+        let mut value = 0.0;
+        self.for_close_pairs(&x, |kind, pos, c, a, b| {
             let eps = self.mollifier_eps(kind, a, b);
-            let Some((e, grad, hess)) =
-                pair_barrier_mollified(kind, &pos, s_hat, self.kappa, which, eps)
+            let Some((e, grad, hess)) = barrier_of(kind, &pos, c, s_hat, self.kappa, which, eps)
             else {
-                continue;
+                return;
             };
             value += e;
             if !e.is_finite() {
-                continue;
+                return;
             }
+            let nodes = self.nodes(kind, a, b);
             for (i, &n) in nodes.iter().enumerate() {
                 for c in 0..3 {
                     g[3 * n + c] += grad[3 * i + c];
                 }
             }
-            if let (Some((values, pattern)), Some(k)) = (h.as_mut(), hess) {
-                scatter(&k, &nodes, values, pattern, None);
+            match (&mut hessians, hess) {
+                (PairHessians::Scatter(values, pattern), Some(k)) => {
+                    scatter(&k, &nodes, values, pattern, None)
+                }
+                (PairHessians::Collect(list), Some(k)) => list.push((nodes, k)),
+                _ => {}
             }
-        }
+        });
         value
-    }
-
-    /// Adds the barrier's projected Hessian to the values on `pattern`
-    /// (module docs), leaving out the rows and columns of the degrees of
-    /// freedom `fixed` holds: what the step adds after the supports, on
-    /// the Hessian's layout grown with the pairs
-    /// (`integrator::grown`).
-    pub fn add_hessian(
-        &self,
-        y: &[f64],
-        values: &mut [f64],
-        pattern: &SparsePattern,
-        fixed: &[bool],
-    ) {
-        let x = points(y);
-        let s_hat = self.distance * self.distance;
-        let mut pairs = Vec::new();
-        self.for_close_pairs(&x, |kind, pos, a, b| pairs.push((kind, pos, a, b)));
-        for (kind, pos, a, b) in pairs {
-            let nodes = self.nodes(kind, a, b);
-            let eps = self.mollifier_eps(kind, a, b);
-            if let Some((e, _, Some(k))) =
-                pair_barrier_mollified(kind, &pos, s_hat, self.kappa, Hessian::Projected, eps)
-                && e.is_finite()
-            {
-                scatter(&k, &nodes, values, pattern, Some(fixed));
-            }
-        }
     }
 
     /// The pairs closer than `d̂` at the step's start positions `start`,
@@ -383,8 +357,7 @@ impl SelfContact {
         let x = points(start);
         let s_hat = self.distance * self.distance;
         let mut out = Vec::new();
-        self.for_close_pairs(&x, |kind, pos, a, b| {
-            let c = kind.closest(&pos);
+        self.for_close_pairs(&x, |kind, pos, c, a, b| {
             let r = (0..4).fold([0.0; 3], |acc, i| {
                 crate::vec3::add(acc, crate::vec3::scale(pos[i], c.weights[i]))
             });
@@ -423,38 +396,32 @@ impl SelfContact {
         if reach == 0.0 {
             return 1.0;
         }
+        // The largest fraction CCD allows over `pairs`.
+        let ccd = |pairs: &Candidates| {
+            let mut t = 1.0f64;
+            let kinds =
+                (pairs.point_triangle.iter()).map(|&(q, k)| (PairKind::PointTriangle, q, k));
+            let kinds = kinds.chain(
+                pairs
+                    .edge_edge
+                    .iter()
+                    .map(|&(e, k)| (PairKind::EdgeEdge, e, k)),
+            );
+            for (kind, a, b) in kinds {
+                let n = self.nodes(kind, a, b);
+                let (xn, pn) = (n.map(|i| x[i]), n.map(|i| p[i]));
+                t = t.min(additive_ccd(kind, &xn, &pn, 0.0, CCD_SCALE, t));
+            }
+            t
+        };
         // A short increment: the kept broad phase covers its sweep; a long
         // one: the boxes swept over it (a margin as long would take in far
         // too many pairs).
-        let c = if reach <= 2.0 * self.distance {
-            self.with_candidates(&x, reach, Candidates::clone)
+        if reach <= 2.0 * self.distance {
+            self.with_candidates(&x, reach, ccd)
         } else {
-            swept_candidates(&x, &p, &self.triangles, &self.edges, 0.0)
-        };
-        let mut t = 1.0f64;
-        for &(q, k) in &c.point_triangle {
-            let n = self.nodes(PairKind::PointTriangle, q, k);
-            t = t.min(additive_ccd(
-                PairKind::PointTriangle,
-                &n.map(|i| x[i]),
-                &n.map(|i| p[i]),
-                0.0,
-                CCD_SCALE,
-                t,
-            ));
+            ccd(&swept_candidates(&x, &p, &self.triangles, &self.edges, 0.0))
         }
-        for &(e, k) in &c.edge_edge {
-            let n = self.nodes(PairKind::EdgeEdge, e, k);
-            t = t.min(additive_ccd(
-                PairKind::EdgeEdge,
-                &n.map(|i| x[i]),
-                &n.map(|i| p[i]),
-                0.0,
-                CCD_SCALE,
-                t,
-            ));
-        }
-        t
     }
 }
 
@@ -523,6 +490,33 @@ pub fn pair_friction(
         }
     }
     (f * f0, g, h, f * f1 * s)
+}
+
+/// What [`SelfContact::add`] does with the pairs' projected Hessians.
+pub enum PairHessians<'a> {
+    /// Nothing: value and gradient only.
+    None,
+    /// Adds them to values on a pattern (couplings it lacks to the
+    /// diagonal).
+    Scatter(&'a mut [f64], &'a SparsePattern),
+    /// Keeps each with its four nodes (cleared first), for
+    /// [`scatter_hessians`] onto another pattern later.
+    Collect(&'a mut Vec<([usize; 4], [f64; 144])>),
+}
+
+/// Adds the pair Hessians `hessians` (as [`PairHessians::Collect`] keeps
+/// them) to `values` on `pattern`, leaving out the held degrees of
+/// freedom `fixed`: self-contact's couplings on the stepper's grown layout
+/// (`integrator::grown`).
+pub fn scatter_hessians(
+    hessians: &[([usize; 4], [f64; 144])],
+    values: &mut [f64],
+    pattern: &SparsePattern,
+    fixed: &[bool],
+) {
+    for (nodes, k) in hessians {
+        scatter(k, nodes, values, pattern, Some(fixed));
+    }
 }
 
 /// Where a Hessian goes: values on a pattern and, if given, the held

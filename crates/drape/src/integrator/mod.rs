@@ -331,8 +331,6 @@ fn step_potential<'a>(
             self_contact,
             model.pattern(),
             (start, dt),
-            self_contact.friction(),
-            self_contact.stick_speed(),
             !grown,
         )));
     }

@@ -7,7 +7,7 @@
 //! term lags nothing.
 
 use super::super::potential::{Stencils, StepContext, StepTerm, TermValue};
-use crate::contact::self_contact::SelfContact;
+use crate::contact::self_contact::{PairHessians, SelfContact, scatter_hessians};
 use crate::solver::SparsePattern;
 
 /// The self-contact barrier.
@@ -15,17 +15,21 @@ pub struct SelfContactTerm<'a> {
     contact: &'a SelfContact,
     pattern: &'a SparsePattern,
     hessian: bool,
+    /// The pairs' projected Hessians of the last evaluation that asked for
+    /// one, kept for [`StepTerm::add_outside`] when `hessian` is off.
+    pairs: Vec<([usize; 4], [f64; 144])>,
 }
 
 impl<'a> SelfContactTerm<'a> {
     /// The barrier of `contact`, its Hessian added on `pattern` if
     /// `hessian` (else the step adds it on its grown layout,
-    /// `integrator::grown`).
+    /// `integrator::grown`, through [`StepTerm::add_outside`]).
     pub fn new(contact: &'a SelfContact, pattern: &'a SparsePattern, hessian: bool) -> Self {
         Self {
             contact,
             pattern,
             hessian,
+            pairs: Vec::new(),
         }
     }
 }
@@ -48,8 +52,13 @@ impl StepTerm for SelfContactTerm<'_> {
         g: &mut [f64],
         h: Option<&mut [f64]>,
     ) -> TermValue {
-        let h = h.filter(|_| self.hessian);
-        let value = self.contact.add(y, g, h.map(|v| (v, self.pattern)));
+        let hessians = match h {
+            None => PairHessians::None,
+            Some(v) if self.hessian => PairHessians::Scatter(v, self.pattern),
+            // Computed with the gradient, added on the grown layout after.
+            Some(_) => PairHessians::Collect(&mut self.pairs),
+        };
+        let value = self.contact.add(y, g, hessians);
         TermValue {
             value,
             potential: true,
@@ -60,13 +69,13 @@ impl StepTerm for SelfContactTerm<'_> {
     fn add_outside(
         &mut self,
         _ctx: &StepContext,
-        y: &[f64],
+        _y: &[f64],
         values: &mut [f64],
         pattern: &SparsePattern,
         fixed: &[bool],
     ) {
         if !self.hessian {
-            self.contact.add_hessian(y, values, pattern, fixed);
+            scatter_hessians(&self.pairs, values, pattern, fixed);
         }
     }
 

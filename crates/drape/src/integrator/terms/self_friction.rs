@@ -26,22 +26,19 @@ pub struct SelfFrictionTerm<'a> {
 
 impl<'a> SelfFrictionTerm<'a> {
     /// The friction of `contact`'s pairs in contact at `start` (the step's
-    /// start positions), with coefficient `mu` and the slip speed
-    /// `stick_speed` (m/s) over a step `dt`; its Hessian added on
-    /// `pattern` in `add` if `hessian`.
+    /// start positions), with its coefficient and slip speed, over a step
+    /// `dt`; its Hessian added on `pattern` in `add` if `hessian`.
     pub fn new(
         contact: &SelfContact,
         pattern: &'a SparsePattern,
         (start, dt): (&'a [f64], f64),
-        mu: f64,
-        stick_speed: f64,
         hessian: bool,
     ) -> Self {
         Self {
             pattern,
             start,
-            pairs: contact.lag_friction(start, mu),
-            smooth: stick_speed * dt,
+            pairs: contact.lag_friction(start, contact.friction()),
+            smooth: contact.stick_speed() * dt,
             hessian,
             dissipated: 0.0,
         }
