@@ -422,6 +422,25 @@ fn energy_never_increases_through_a_landing() {
     assert!(*k.last().unwrap() < 1e-6 * peak);
 }
 
+/// Friction between the layers of a scenario without obstacles (only
+/// self-contact reads `[contact] friction` then) is checked as against
+/// obstacles: a negative coefficient is refused at its line.
+#[test]
+fn a_bad_friction_between_the_layers_is_refused_at_its_line() {
+    let text = ply_on_ply(0.0, -0.1, 1);
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("friction"))
+        .unwrap()
+        + 1;
+    assert_error(
+        &text,
+        line,
+        "contact.friction",
+        &["must be a finite number >= 0", "-0.1"],
+    );
+}
+
 /// Self-contact with the trapezoidal rule is warned about (naming
 /// `time.gamma`); with the default dissipative scheme it is not.
 #[test]
