@@ -374,7 +374,10 @@ pub fn close_pairs(
 
 /// Whether segment `(p, q)` passes through triangle `(a, b, c)`
 /// (Möller & Trumbore 1997, the segment's parameter in [0, 1]; touching
-/// counts).
+/// counts). A segment parallel to the triangle's plane to round-off
+/// (`|det| <= 1e-12 |q - p| |b - a| |c - a|`: a flat fabric's edge beside a
+/// triangle of the same plane) does not pass through it: there the
+/// barycentric coordinates would be round-off divided by round-off.
 pub fn segment_crosses_triangle(
     p: [f64; 3],
     q: [f64; 3],
@@ -386,7 +389,8 @@ pub fn segment_crosses_triangle(
     let (e1, e2) = (sub(b, a), sub(c, a));
     let pv = crate::vec3::cross(dir, e2);
     let det = dot(e1, pv);
-    if det.abs() <= 1e-300 {
+    let length = |v: [f64; 3]| dot(v, v).sqrt();
+    if det.abs() <= 1e-300 || det.abs() <= 1e-12 * length(dir) * length(e1) * length(e2) {
         return false;
     }
     let inv = 1.0 / det;
@@ -784,6 +788,29 @@ mod tests {
             t[0],
             t[1],
             t[2]
+        ));
+        // A flat fabric: an edge in the triangle's plane, its height
+        // round-off apart (as a settled ply's nodes are), never counts;
+        // tilted by 1e-6 through the triangle, it does.
+        let z = 0.00198038;
+        let flat = [
+            [0.0, 0.0, z],
+            [0.01, 0.0, z * (1.0 + 1e-16)],
+            [0.0, 0.01, z],
+        ];
+        assert!(!segment_crosses_triangle(
+            [0.002, 0.002, z * (1.0 - 2e-16)],
+            [0.003, -0.004, z * (1.0 + 3e-16)],
+            flat[0],
+            flat[1],
+            flat[2]
+        ));
+        assert!(segment_crosses_triangle(
+            [0.002, 0.002, z - 1e-6],
+            [0.003, 0.003, z + 1e-6],
+            flat[0],
+            flat[1],
+            flat[2]
         ));
     }
 }
