@@ -8,6 +8,7 @@
 mod support;
 
 use drape::bending::BendingRigidity;
+use drape::element::geometry::MembraneIntegration;
 use drape::element::membrane::Section;
 use drape::integrator::newmark::DynamicWorkspace;
 use drape::integrator::{State, StaticStepper};
@@ -49,10 +50,28 @@ fn model(
 /// [`model`], its nodes `clamped` (`[[fix]] clamp = true`) too.
 fn clamped_model(
     mesh: Mesh,
-    (young, t, rho, g): (f64, f64, f64, f64),
+    material: (f64, f64, f64, f64),
     fixed: Vec<bool>,
     clamped: Vec<bool>,
     rigidity: BendingRigidity,
+) -> Model {
+    membrane_model(
+        mesh,
+        material,
+        (fixed, clamped),
+        rigidity,
+        MembraneIntegration::Auto,
+    )
+}
+
+/// [`clamped_model`] whose curved elements measure their membrane as
+/// `membrane`; `(fixed, clamped)` as there.
+fn membrane_model(
+    mesh: Mesh,
+    (young, t, rho, g): (f64, f64, f64, f64),
+    (fixed, clamped): (Vec<bool>, Vec<bool>),
+    rigidity: BendingRigidity,
+    membrane: MembraneIntegration,
 ) -> Model {
     let load = Load {
         kind: LoadKind::Gravity {
@@ -74,6 +93,7 @@ fn clamped_model(
     .clamped(clamped)
     .mass(MassKind::Lumped)
     .bending(rigidity)
+    .membrane(membrane)
     .build()
     .unwrap()
 }
@@ -82,10 +102,27 @@ fn clamped_model(
 /// load steps from the initial mesh; returns the positions and the Newton
 /// iterations of each increment.
 fn equilibrium(model: &Model, increments: usize) -> (Vec<f64>, Vec<usize>) {
+    try_equilibrium(model, increments).unwrap()
+}
+
+/// [`equilibrium`], or the first increment's error.
+fn try_equilibrium(
+    model: &Model,
+    increments: usize,
+) -> Result<(Vec<f64>, Vec<usize>), drape::solver::newton::NewtonError> {
+    equilibrium_to(model, increments, 1e-12)
+}
+
+/// [`try_equilibrium`] to the Newton increment `tolerance`.
+fn equilibrium_to(
+    model: &Model,
+    increments: usize,
+    tolerance: f64,
+) -> Result<(Vec<f64>, Vec<usize>), drape::solver::newton::NewtonError> {
     let mut ws = DynamicWorkspace::new(model).unwrap();
     let mut state = State::at_rest(model, model.initial_positions());
     let settings = NewtonSettings {
-        tolerance: 1e-12,
+        tolerance,
         residual_tolerance: 1e-6,
         max_iterations: 40,
         chord_steps: 0,
@@ -94,19 +131,17 @@ fn equilibrium(model: &Model, increments: usize) -> (Vec<f64>, Vec<usize>) {
     let length = reference_length(&model.initial_positions());
     let mut iterations = Vec::new();
     for _ in 0..increments {
-        let report = StaticStepper
-            .step(
-                model,
-                &mut state,
-                1.0 / increments as f64,
-                &settings,
-                length,
-                &mut ws,
-            )
-            .unwrap();
+        let report = StaticStepper.step(
+            model,
+            &mut state,
+            1.0 / increments as f64,
+            &settings,
+            length,
+            &mut ws,
+        )?;
         iterations.push(report.newton.iterations);
     }
-    (state.positions, iterations)
+    Ok((state.positions, iterations))
 }
 
 /// Components of the nodes of `nodes` held.
@@ -529,6 +564,104 @@ fn union_jack_study() {
                 "clamped plate, {pattern:?} {n} x {n}: {:+.2} %",
                 100.0 * (w - exact) / exact
             );
+        }
+    }
+}
+
+/// The clamped heavy elastica (`B` = 1e-3 N m, 20 cm long, 2 cm wide,
+/// clamp on the first two node columns) on one node lattice of 36 x 6
+/// spacings, as elements of `order` whose membrane (`E t`, N/m) is
+/// measured as `membrane`: the tip deflection (m) and the elastica's on
+/// the free length from the last held column, or Newton's error.
+fn lattice_cantilever(
+    order: ElementOrder,
+    et: f64,
+    membrane: MembraneIntegration,
+) -> Result<(f64, f64), drape::solver::newton::NewtonError> {
+    let (l, b) = (0.2_f64, 1.0e-3);
+    let (along, across) = (36, 6);
+    let h = l / along as f64;
+    let t = 6e-4;
+    let k = order.degree();
+    let mesh = rectangle(
+        [l, 0.02],
+        [along / k, across / k],
+        Pattern::Right,
+        [0.5 * l, 0.0, 0.0],
+        order,
+    );
+    let count = mesh.node_count();
+    let held: Vec<bool> = mesh.nodes.iter().map(|x| x[0] < 1.5 * h).collect();
+    let fixed = hold(count, (0..count).filter(|&a| held[a]));
+    let tip: Vec<usize> = (0..count)
+        .filter(|&a| (mesh.nodes[a][0] - l).abs() < 1e-12)
+        .collect();
+    let m = membrane_model(
+        mesh,
+        (et / t, t, 320.0, 9.81),
+        (fixed, held),
+        BendingRigidity::Isotropic(b),
+        membrane,
+    );
+    let increments = if et > 2e5 { 100 } else { 20 };
+    let (y, _) = equilibrium_to(&m, increments, 1e-10)?;
+    let w = -tip.iter().map(|&a| y[3 * a + 2]).sum::<f64>() / tip.len() as f64;
+    Ok((w, support::elastica::cantilever(l - h, Q, b).tip_deflection))
+}
+
+/// Issue 31: T6 and T10 with bending bend as accurately as T3 on the
+/// same nodes. At `E t` = 1e5 N/m (a stiff fabric; B = 1e-3 N m) the
+/// clamped heavy elastica on one node lattice: T3 +0.44 mm; T6 and T10
+/// measuring their membrane on their sub-triangles (`"auto"` with
+/// bending) the same to 0.01 mm; T6 on its own quadratic interpolation
+/// (`"curved"`) locks, 7.8 mm (5 %) too stiff.
+#[test]
+fn higher_orders_bend_as_t3_does_on_the_same_nodes() {
+    let et = 1e5;
+    let (t3, reference) =
+        lattice_cantilever(ElementOrder::Linear, et, MembraneIntegration::Auto).unwrap();
+    eprintln!("T3: tip {t3:.5} m, elastica {reference:.5} m");
+    assert!((t3 - reference).abs() < 1e-3);
+    for order in [ElementOrder::Quadratic, ElementOrder::Cubic] {
+        let (w, _) = lattice_cantilever(order, et, MembraneIntegration::Auto).unwrap();
+        eprintln!("{order:?} on sub-triangles: tip {w:.5} m");
+        assert!((w - t3).abs() < 1e-4, "{order:?}: {w} against T3's {t3}");
+    }
+    let (locked, _) =
+        lattice_cantilever(ElementOrder::Quadratic, et, MembraneIntegration::Curved).unwrap();
+    eprintln!("Quadratic, curved: tip {locked:.5} m");
+    assert!(locked < reference - 3e-3, "the curved T6 locks: {locked}");
+}
+
+/// Issue 31 study (not a check: `cargo test --release -p drape --test
+/// bending -- --ignored --nocapture higher_orders`): the lattice
+/// cantilever ([`lattice_cantilever`]) as T3, T6 and T10, each membrane
+/// measure, at membrane stiffnesses `E t` from a soft to a stiff fabric.
+#[test]
+#[ignore]
+fn higher_orders_against_the_elastica_study() {
+    for et in [2e3, 3e4, 1e5, 3e5, 1e6] {
+        for order in [
+            ElementOrder::Linear,
+            ElementOrder::Quadratic,
+            ElementOrder::Cubic,
+        ] {
+            for membrane in [
+                MembraneIntegration::SubTriangles,
+                MembraneIntegration::Curved,
+            ] {
+                if order == ElementOrder::Linear && membrane == MembraneIntegration::Curved {
+                    continue;
+                }
+                match lattice_cantilever(order, et, membrane) {
+                    Ok((w, reference)) => eprintln!(
+                        "E t = {et:.0e} N/m, {order:?}, {membrane:?}: tip {w:.5} m, elastica {reference:.5} m ({:+.2} mm, {:+.2} %)",
+                        1e3 * (w - reference),
+                        100.0 * (w - reference) / reference
+                    ),
+                    Err(e) => eprintln!("E t = {et:.0e} N/m, {order:?}, {membrane:?}: {e}"),
+                }
+            }
         }
     }
 }

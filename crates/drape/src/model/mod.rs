@@ -17,6 +17,7 @@ use crate::bending::{Bending, BendingRigidity};
 use crate::contact::ContactModel;
 use crate::contact::self_contact::{SelfContact, SelfContactSpec};
 use crate::element::ElementGeometry;
+use crate::element::geometry::MembraneIntegration;
 use crate::element::membrane::Section;
 use crate::load::pressure::PressureQuadrature;
 use crate::load::{Load, LoadKind};
@@ -106,9 +107,18 @@ pub struct ModelBuilder {
     bending: Option<BendingRigidity>,
     clamped: Vec<bool>,
     self_contact: Option<SelfContactSpec>,
+    membrane: MembraneIntegration,
 }
 
 impl ModelBuilder {
+    /// Where curved elements measure their membrane strain (default
+    /// [`MembraneIntegration::Auto`]: on their sub-triangles with bending,
+    /// on their own interpolation without).
+    pub fn membrane(mut self, membrane: MembraneIntegration) -> Self {
+        self.membrane = membrane;
+        self
+    }
+
     /// External loads.
     pub fn loads(mut self, loads: Vec<Load>) -> Self {
         self.loads = loads;
@@ -176,6 +186,7 @@ impl ModelBuilder {
             bending,
             clamped,
             self_contact,
+            membrane,
         } = self;
         mesh.validate()?;
         let self_contact = match self_contact {
@@ -191,11 +202,18 @@ impl ModelBuilder {
             None => None,
         };
         let p = mesh.order.degree();
-        let geometry = ElementGeometry::with_axis(
-            &mesh,
-            &QuadratureRule::of_degree(4 * (p - 1)),
-            material.axis(),
-        )?;
+        let geometry = match membrane.resolve(bending.is_some()) {
+            MembraneIntegration::SubTriangles if p > 1 => ElementGeometry::on_sub_triangles(
+                &mesh,
+                &crate::bending::triangulate(&mesh).0,
+                material.axis(),
+            )?,
+            _ => ElementGeometry::with_axis(
+                &mesh,
+                &QuadratureRule::of_degree(4 * (p - 1)),
+                material.axis(),
+            )?,
+        };
         let colours = colour_elements(mesh.node_count(), mesh.elements());
         let parallel = parallel_for(&mesh);
         let halves = (!parallel).then(|| Halves::new(&mesh, &colours));
@@ -452,6 +470,7 @@ impl Model {
             bending: None,
             clamped: Vec::new(),
             self_contact: None,
+            membrane: MembraneIntegration::Auto,
         }
     }
 

@@ -68,6 +68,7 @@ impl Scenario {
             .mass(self.analysis.mass)
             .contact(contact)
             .bending(bending)
+            .membrane(self.mesh.membrane)
             .self_contact(self_contact)
             .build()
             .map_err(|e| match e {

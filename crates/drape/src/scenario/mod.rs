@@ -148,6 +148,11 @@ pub struct MeshSpec {
     /// File: path of a Gmsh `.msh` (2.2 or 4.1, ASCII or binary) or `.obj`,
     /// relative to the scenario file's folder.
     pub path: Option<PathBuf>,
+    /// Where curved elements (order 2 and 3) measure their membrane strain:
+    /// `"auto"` (default: `"sub-triangles"` with bending, `"curved"`
+    /// without), `"curved"` or `"sub-triangles"`. No effect on order 1.
+    #[serde(default)]
+    pub membrane: crate::element::geometry::MembraneIntegration,
 }
 
 /// Mesh shapes.
