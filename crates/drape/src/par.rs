@@ -27,9 +27,15 @@ use std::thread::{self, Thread};
 use std::time::{Duration, Instant};
 
 /// How long the helper spins for a task after its last one before it
-/// parks: longer than a Newton iteration of a small model, so that a run
-/// keeps it awake from one iteration to the next.
-pub const SPIN: Duration = Duration::from_millis(2);
+/// parks: longer than the gaps between the split loops of one Newton
+/// iteration of a small model (tens of microseconds on the pedestal), far
+/// shorter than the serial work between a larger model's loops (the
+/// bending assembly of a mid-size fabric, milliseconds), during which the
+/// helper used to spin away a core: 100 us instead of 2 ms left the
+/// pedestal's wall time unchanged (ratio 0.99, 7 runs each) and took the
+/// settle benchmark's CPU time from 26.4 to 21.7 s at the same wall time
+/// (docs/performance.md, "A helper that does not spin").
+pub const SPIN: Duration = Duration::from_micros(100);
 
 /// A task published to the helper: the closure's state and how to run it.
 struct JobRef {
