@@ -12,9 +12,12 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 fn main() {
-    let path = std::env::args().nth(1).map(PathBuf::from).unwrap_or_else(|| {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/settle-bending-t3.toml")
-    });
+    let path = std::env::args()
+        .nth(1)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/settle-bending-t3.toml")
+        });
     let text = std::fs::read_to_string(&path).unwrap();
     let s = Scenario::parse(&text, &path)
         .unwrap()

@@ -568,19 +568,35 @@ fn union_jack_study() {
     }
 }
 
-/// The clamped heavy elastica (`B` = 1e-3 N m, 20 cm long, 2 cm wide,
-/// clamp on the first two node columns) on one node lattice of 36 x 6
-/// spacings, as elements of `order` whose membrane (`E t`, N/m) is
-/// measured as `membrane`: the tip deflection (m) and the elastica's on
-/// the free length from the last held column, or Newton's error.
-fn lattice_cantilever(
+/// Peirce's cantilever (BS 3356, ASTM D1388) in large deflection: a 20
+/// cm x 2 cm strip clamped on its first two node columns (`clamp =
+/// true`), its bending rigidity set so that `q L^3 / B` = 8 on the free
+/// length `L` from the last held column — the ratio at which the
+/// elastica's clamp-to-tip chord lies 41.5 deg below the horizontal, the
+/// angle the test reads. On one node lattice of 36 x 6 spacings, as
+/// elements of `order` whose membrane (`E t`, N/m) is measured as
+/// `membrane`: the chord angle and the elastica's (degrees), or Newton's
+/// error. [`lattice_cantilever`] with another `q L^3 / B`.
+fn peirce(
     order: ElementOrder,
     et: f64,
     membrane: MembraneIntegration,
 ) -> Result<(f64, f64), drape::solver::newton::NewtonError> {
-    let (l, b) = (0.2_f64, 1.0e-3);
+    lattice_cantilever(order, et, membrane, 8.0)
+}
+
+/// [`peirce`]'s strip with `q L^3 / B` = `ratio`.
+fn lattice_cantilever(
+    order: ElementOrder,
+    et: f64,
+    membrane: MembraneIntegration,
+    ratio: f64,
+) -> Result<(f64, f64), drape::solver::newton::NewtonError> {
+    let l = 0.2_f64;
     let (along, across) = (36, 6);
     let h = l / along as f64;
+    let free = l - h;
+    let b = Q * free.powi(3) / ratio;
     let t = 6e-4;
     let k = order.degree();
     let mesh = rectangle(
@@ -605,38 +621,61 @@ fn lattice_cantilever(
     );
     let increments = if et > 2e5 { 100 } else { 20 };
     let (y, _) = equilibrium_to(&m, increments, 1e-10)?;
-    let w = -tip.iter().map(|&a| y[3 * a + 2]).sum::<f64>() / tip.len() as f64;
-    Ok((w, support::elastica::cantilever(l - h, Q, b).tip_deflection))
+    let mean = |i: usize| tip.iter().map(|&a| y[3 * a + i]).sum::<f64>() / tip.len() as f64;
+    let chord = (-mean(2)).atan2(mean(0) - h).to_degrees();
+    let reference = support::elastica::cantilever(free, Q, b)
+        .chord_angle()
+        .to_degrees();
+    Ok((chord, reference))
 }
 
 /// Issue 31: T6 and T10 with bending bend as accurately as T3 on the
-/// same nodes. At `E t` = 1e5 N/m (a stiff fabric; B = 1e-3 N m) the
-/// clamped heavy elastica on one node lattice: T3 +0.44 mm; T6 and T10
-/// measuring their membrane on their sub-triangles (`"auto"` with
-/// bending) the same to 0.01 mm; T6 on its own quadratic interpolation
-/// (`"curved"`) locks, 7.8 mm (5 %) too stiff.
+/// same nodes, at every membrane stiffness. Peirce's cantilever
+/// ([`peirce`], elastica chord 41.49 deg) at `E t` = 2e3 and 1e6 N/m:
+/// T3, T6 and T10 (their membrane on their sub-triangles, `"auto"` with
+/// bending) within 0.3 deg of the elastica; T6 on its own quadratic
+/// interpolation (`"curved"`) locks at 1e6, more than 3 deg short.
 #[test]
 fn higher_orders_bend_as_t3_does_on_the_same_nodes() {
-    let et = 1e5;
-    let (t3, reference) =
-        lattice_cantilever(ElementOrder::Linear, et, MembraneIntegration::Auto).unwrap();
-    eprintln!("T3: tip {t3:.5} m, elastica {reference:.5} m");
-    assert!((t3 - reference).abs() < 1e-3);
-    for order in [ElementOrder::Quadratic, ElementOrder::Cubic] {
-        let (w, _) = lattice_cantilever(order, et, MembraneIntegration::Auto).unwrap();
-        eprintln!("{order:?} on sub-triangles: tip {w:.5} m");
-        assert!((w - t3).abs() < 1e-4, "{order:?}: {w} against T3's {t3}");
+    for et in [2e3, 1e6] {
+        for order in [
+            ElementOrder::Linear,
+            ElementOrder::Quadratic,
+            ElementOrder::Cubic,
+        ] {
+            let (chord, reference) = peirce(order, et, MembraneIntegration::Auto).unwrap();
+            eprintln!(
+                "E t = {et:e} N/m, {order:?}: chord {chord:.3} deg, elastica {reference:.3} deg"
+            );
+            assert!(
+                (chord - reference).abs() < 0.3,
+                "{order:?} at {et}: {chord} deg"
+            );
+        }
     }
-    let (locked, _) =
-        lattice_cantilever(ElementOrder::Quadratic, et, MembraneIntegration::Curved).unwrap();
-    eprintln!("Quadratic, curved: tip {locked:.5} m");
-    assert!(locked < reference - 3e-3, "the curved T6 locks: {locked}");
+    let (locked, reference) =
+        peirce(ElementOrder::Quadratic, 1e6, MembraneIntegration::Curved).unwrap();
+    eprintln!("E t = 1e6 N/m, Quadratic, curved: chord {locked:.3} deg");
+    assert!(
+        locked < reference - 3.0,
+        "the curved T6 locks: {locked} deg"
+    );
+    // Heavier (q L^3 / B = 14.7, B = 1e-3 N m) and stiff: the static
+    // Hessian's Cholesky solve misses the residual check by a hair
+    // (1.007e-6 |b|) until the linear solver refines it with the factor.
+    let ratio = Q * (0.2 - 0.2 / 36.0_f64).powi(3) / 1e-3;
+    let (chord, reference) =
+        lattice_cantilever(ElementOrder::Linear, 1e6, MembraneIntegration::Auto, ratio).unwrap();
+    eprintln!(
+        "heavy elastica, E t = 1e6 N/m, T3: chord {chord:.3} deg, elastica {reference:.3} deg"
+    );
+    assert!((chord - reference).abs() < 0.3);
 }
 
 /// Issue 31 study (not a check: `cargo test --release -p drape --test
-/// bending -- --ignored --nocapture higher_orders`): the lattice
-/// cantilever ([`lattice_cantilever`]) as T3, T6 and T10, each membrane
-/// measure, at membrane stiffnesses `E t` from a soft to a stiff fabric.
+/// bending -- --ignored --nocapture higher_orders`): Peirce's cantilever
+/// ([`peirce`]) as T3, T6 and T10, each membrane measure, at membrane
+/// stiffnesses `E t` from a soft to a stiff fabric.
 #[test]
 #[ignore]
 fn higher_orders_against_the_elastica_study() {
@@ -653,11 +692,10 @@ fn higher_orders_against_the_elastica_study() {
                 if order == ElementOrder::Linear && membrane == MembraneIntegration::Curved {
                     continue;
                 }
-                match lattice_cantilever(order, et, membrane) {
-                    Ok((w, reference)) => eprintln!(
-                        "E t = {et:.0e} N/m, {order:?}, {membrane:?}: tip {w:.5} m, elastica {reference:.5} m ({:+.2} mm, {:+.2} %)",
-                        1e3 * (w - reference),
-                        100.0 * (w - reference) / reference
+                match peirce(order, et, membrane) {
+                    Ok((chord, reference)) => eprintln!(
+                        "E t = {et:.0e} N/m, {order:?}, {membrane:?}: chord {chord:.3} deg, elastica {reference:.3} deg ({:+.3} deg)",
+                        chord - reference
                     ),
                     Err(e) => eprintln!("E t = {et:.0e} N/m, {order:?}, {membrane:?}: {e}"),
                 }
