@@ -52,3 +52,55 @@ fn the_drape_tester_settles_quasi_statically_into_folds() {
     assert!(folds >= 3, "{folds} folds");
     std::fs::remove_dir_all(&out).unwrap();
 }
+
+/// A specimen held by friction alone (the gripped drape tester, 4 rings)
+/// does not settle statically: the run fails (exit status 1) with the
+/// hint for a fabric with bending — more increments, or a dynamic run —
+/// rather than the membrane's (a prestress), and keeps what it computed.
+#[test]
+fn a_gripped_specimen_fails_statically_with_the_fabric_hint() {
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/drape-tester.toml");
+    let text = std::fs::read_to_string(&example).unwrap();
+    let (head, rest) = text.split_at(text.find("[time]").unwrap());
+    let output = &rest[rest.find("[output]").unwrap()..];
+    let rings = head
+        .lines()
+        .map(|l| {
+            if l.starts_with("rings =") {
+                "rings = 4"
+            } else {
+                l
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let scenario_text = format!("{rings}\n[analysis]\nkind = \"static\"\nsteps = 20\n\n{output}");
+    let dir = std::env::temp_dir().join(format!("drape-gripped-static-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scenario = dir.join("gripped-static.toml");
+    std::fs::write(&scenario, scenario_text).unwrap();
+    let out = dir.join("out");
+    let run = Command::new(env!("CARGO_BIN_EXE_drape"))
+        .args([
+            "run",
+            scenario.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    for fragment in [
+        "a static settle of a fabric with bending",
+        "[analysis] steps",
+        "dynamically to rest",
+    ] {
+        assert!(stderr.contains(fragment), "{fragment:?} not in {stderr}");
+    }
+    assert!(!stderr.contains("prestress"), "{stderr}");
+    assert!(out.join("summary.json").exists() && out.join("history.csv").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
