@@ -9,13 +9,9 @@ use serde_json::Value;
 use std::path::Path;
 use std::process::Command;
 
-#[test]
-fn the_drape_tester_settles_quasi_statically_into_folds() {
-    let scenario = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../drape-bench/scenarios/settle-bending-t3-static.toml");
-    let out = std::env::temp_dir().join(format!("drape-quasi-static-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&out);
-    let run = Command::new(env!("CARGO_BIN_EXE_drape"))
+/// `drape run SCENARIO --out OUT --quiet`.
+fn run(scenario: &Path, out: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_drape"))
         .args([
             "run",
             scenario.to_str().unwrap(),
@@ -24,7 +20,16 @@ fn the_drape_tester_settles_quasi_statically_into_folds() {
             "--quiet",
         ])
         .output()
-        .unwrap();
+        .unwrap()
+}
+
+#[test]
+fn the_drape_tester_settles_quasi_statically_into_folds() {
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../drape-bench/scenarios/settle-bending-t3-static.toml");
+    let out = std::env::temp_dir().join(format!("drape-quasi-static-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let run = run(&scenario, &out);
     assert!(
         run.status.success(),
         "{}",
@@ -81,16 +86,7 @@ fn a_gripped_specimen_fails_statically_with_the_fabric_hint() {
     let scenario = dir.join("gripped-static.toml");
     std::fs::write(&scenario, scenario_text).unwrap();
     let out = dir.join("out");
-    let run = Command::new(env!("CARGO_BIN_EXE_drape"))
-        .args([
-            "run",
-            scenario.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ])
-        .output()
-        .unwrap();
+    let run = run(&scenario, &out);
     assert_eq!(run.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&run.stderr);
     for fragment in [
