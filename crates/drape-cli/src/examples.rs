@@ -15,6 +15,10 @@ pub const ALL: &[(&str, &str)] = &[
         include_str!("../../../examples/drape-tester.toml"),
     ),
     (
+        "drape-tester-static",
+        include_str!("../../../examples/drape-tester-static.toml"),
+    ),
+    (
         "woven-drape-tester",
         include_str!("../../../examples/woven-drape-tester.toml"),
     ),

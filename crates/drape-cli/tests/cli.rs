@@ -151,9 +151,32 @@ fn copy_dir(from: &Path, to: &Path) {
 
 /// Replaces the `segments = ...` line of `[time]` (possibly an array that
 /// spans several lines) by `steps` steps of size `dt` (default: the first
-/// segment's), and returns the new text with that `dt`. A plain textual
-/// edit: drape-cli does not depend on a TOML parser.
+/// segment's), and returns the new text with that `dt`. A static scenario
+/// (no `segments`) gets `steps` load increments instead (`[analysis]
+/// steps`), each `1 / steps` of the load. A plain textual edit: drape-cli
+/// does not depend on a TOML parser.
 fn shorten(text: &str, steps: usize, dt: Option<f64>) -> (String, f64) {
+    if !text.lines().any(|l| l.trim_start().starts_with("segments")) {
+        let mut in_analysis = false;
+        let mut out = String::new();
+        for line in text.lines() {
+            let trimmed = line.trim_start();
+            if trimmed.starts_with('[') {
+                in_analysis = trimmed.split('#').next().unwrap_or("").trim() == "[analysis]";
+            }
+            if in_analysis && trimmed.starts_with("steps") {
+                out.push_str(&format!("steps = {steps}\n"));
+            } else {
+                out.push_str(line);
+                out.push('\n');
+            }
+        }
+        assert!(
+            out.contains("kind = \"static\""),
+            "a scenario without `segments` that is not static"
+        );
+        return (out, 1.0 / steps as f64);
+    }
     let forced = dt;
     let mut out = String::new();
     let mut dt = None;

@@ -58,10 +58,11 @@ fn the_drape_tester_settles_quasi_statically_into_folds() {
     std::fs::remove_dir_all(&out).unwrap();
 }
 
-/// A specimen held by friction alone (the gripped drape tester, 4 rings)
+/// The gripped drape tester at 4 rings with the default increment test
 /// does not settle statically: the run fails (exit status 1) with the
-/// hint for a fabric with bending — more increments, or a dynamic run —
-/// rather than the membrane's (a prestress), and keeps what it computed.
+/// hint for a fabric with bending — more increments, a looser increment
+/// test, or a dynamic run — rather than the membrane's (a prestress), and
+/// keeps what it computed.
 #[test]
 fn a_gripped_specimen_fails_statically_with_the_fabric_hint() {
     let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/drape-tester.toml");
@@ -92,6 +93,7 @@ fn a_gripped_specimen_fails_statically_with_the_fabric_hint() {
     for fragment in [
         "a static settle of a fabric with bending",
         "[analysis] steps",
+        "[solver] tolerance",
         "dynamically to rest",
     ] {
         assert!(stderr.contains(fragment), "{fragment:?} not in {stderr}");

@@ -700,7 +700,7 @@ impl Stepper<'_, '_> {
             } else if self.setup.model.bending().is_some() {
                 // A fabric with bending has stiffness across its plane;
                 // what stalls is the loading path through its buckling.
-                "; a static settle of a fabric with bending follows one loading path through its folds, and Newton stalled on it (a soft fabric, or one held by friction alone, may have no nearby equilibrium): give it more increments ([analysis] steps) or run it dynamically to rest (beta = 1, gamma = 1.5)".into()
+                "; a static settle of a fabric with bending follows one loading path through its folds, and Newton stalled on it: give it more increments ([analysis] steps), a looser increment test ([solver] tolerance) where the residual is already small (a specimen held by friction alone), or run it dynamically to rest (beta = 1, gamma = 1.5)".into()
             } else {
                 "; a static analysis needs a membrane in tension from the first increment on (prestress, or supports that stretch it): a slack membrane has no stiffness across its plane, so run it dynamically to rest instead (beta = 1, gamma = 1.5)".into()
             },
