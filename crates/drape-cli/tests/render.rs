@@ -10,14 +10,21 @@ fn drape(args: &[&str]) -> std::process::Output {
         .unwrap()
 }
 
-/// Each example, cut to a few steps of its last segment's size (the
-/// rendering, not the mechanics, is under test).
+/// Each example, cut to a few steps of its last segment's size, or to
+/// four load increments when static (the rendering, not the mechanics, is
+/// under test).
 fn short_example(file: &Path, dir: &Path) -> PathBuf {
     let text = std::fs::read_to_string(file).unwrap();
+    let mut table = String::new();
     let text: String = text
         .lines()
         .map(|l| {
-            if l.trim_start().starts_with("segments") {
+            if l.trim_start().starts_with('[') {
+                table = l.split('#').next().unwrap_or("").trim().to_string();
+            }
+            if table == "[analysis]" && l.trim_start().starts_with("steps") {
+                "steps = 4".to_string()
+            } else if l.trim_start().starts_with("segments") {
                 let dt = l
                     .rsplit("dt =")
                     .next()
