@@ -55,6 +55,23 @@ fn drive(text: &str, end: f64) -> (Vec<usize>, Vec<f64>, usize, usize) {
     (crossings, y, steps, builds)
 }
 
+/// Drives scenario `text(contact)` to `end` (s) with self-contact
+/// (`self_distance` 1 mm) and without: no crossing after any step with it,
+/// more than 10 after some step without (`what` names the case in the
+/// printout).
+fn crosses_only_without_self_contact(what: &str, text: &dyn Fn(&str) -> String, end: f64) {
+    let (on, _, steps, builds) = drive(&text("self = true\nself_distance = 1.0e-3"), end);
+    let worst = on.iter().copied().max().unwrap_or(0);
+    eprintln!(
+        "{what}, self-contact: {steps} steps, layout built {builds} times, most crossings {worst}"
+    );
+    assert_eq!(worst, 0, "crossings per step: {on:?}");
+    let (off, _, _, _) = drive(&text(""), end);
+    let most = off.iter().copied().max().unwrap_or(0);
+    eprintln!("{what} without self-contact: up to {most} crossings");
+    assert!(most > 10);
+}
+
 /// `(time, position)` of one node after every step.
 type Track = Vec<(f64, [f64; 3])>;
 
@@ -216,16 +233,7 @@ friction = 0.5
 "#
         )
     };
-    let (on, _, steps, builds) = drive(&text("self = true\nself_distance = 1.0e-3"), 0.3);
-    let worst = on.iter().copied().max().unwrap_or(0);
-    eprintln!(
-        "strip, self-contact: {steps} steps, layout built {builds} times, most crossings {worst}"
-    );
-    assert_eq!(worst, 0, "crossings per step: {on:?}");
-    let (off, _, _, _) = drive(&text(""), 0.3);
-    let most = off.iter().copied().max().unwrap_or(0);
-    eprintln!("strip without self-contact: up to {most} crossings");
-    assert!(most > 10);
+    crosses_only_without_self_contact("strip", &text, 0.3);
 }
 
 /// A 20 cm x 6 cm cloth lying on a plane with friction, its short edges
@@ -278,16 +286,7 @@ friction = 0.3
 "#
         )
     };
-    let (on, _, steps, builds) = drive(&text("self = true\nself_distance = 1.0e-3"), 0.25);
-    let worst = on.iter().copied().max().unwrap_or(0);
-    eprintln!(
-        "pushed cloth, self-contact: {steps} steps, layout built {builds} times, most crossings {worst}"
-    );
-    assert_eq!(worst, 0, "crossings per step: {on:?}");
-    let (off, _, _, _) = drive(&text(""), 0.25);
-    let most = off.iter().copied().max().unwrap_or(0);
-    eprintln!("pushed cloth without self-contact: up to {most} crossings");
-    assert!(most > 10);
+    crosses_only_without_self_contact("pushed cloth", &text, 0.25);
 }
 
 /// Friction between the layers: a 6 cm ply lying on a 20 cm one that is

@@ -739,45 +739,20 @@ mod tests {
         assert!(gradient_error(mf, mg, &flat, 1e-9) < 1e-5);
         assert!(jacobian_error(mg, mh, &flat, 1e-9) < 1e-5);
         let s_hat = 1e-6;
-        let e = |v: &[f64]| {
+        let pair = |v: &[f64], hessian| {
             pair_barrier_mollified(
                 PairKind::EdgeEdge,
                 &nodes(v),
                 s_hat,
                 1e6,
-                Hessian::None,
+                hessian,
                 Some(eps),
             )
             .unwrap()
-            .0
         };
-        let g = |v: &[f64]| {
-            pair_barrier_mollified(
-                PairKind::EdgeEdge,
-                &nodes(v),
-                s_hat,
-                1e6,
-                Hessian::None,
-                Some(eps),
-            )
-            .unwrap()
-            .1
-            .to_vec()
-        };
-        let h = |v: &[f64]| {
-            pair_barrier_mollified(
-                PairKind::EdgeEdge,
-                &nodes(v),
-                s_hat,
-                1e6,
-                Hessian::Exact,
-                Some(eps),
-            )
-            .unwrap()
-            .2
-            .unwrap()
-            .to_vec()
-        };
+        let e = |v: &[f64]| pair(v, Hessian::None).0;
+        let g = |v: &[f64]| pair(v, Hessian::None).1.to_vec();
+        let h = |v: &[f64]| pair(v, Hessian::Exact).2.unwrap().to_vec();
         let (eg, eh) = (
             gradient_error(e, g, &flat, 1e-10),
             jacobian_error(g, h, &flat, 1e-10),
