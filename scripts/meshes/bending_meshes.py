@@ -11,6 +11,11 @@ holding this script):
   linear triangles (T3) of characteristic length 0.2/n, Gmsh 4.1 ASCII;
   the four corners are mesh nodes and the boundary nodes lie exactly on
   the square's edges;
+* plate-criss-cross-16.msh: the same plate as a structured transfinite
+  mesh of 16 x 16 squares whose diagonals alternate like a checkerboard
+  (Gmsh's "Alternate" arrangement), linear triangles, Gmsh 4.1 ASCII: the
+  mesh on which drape's rotation-free bending does not converge and that
+  it warns about (docs/validation.md);
 * plate-unstructured-16-t6.msh: the n = 16 plate raised to quadratic
   triangles (T6), Gmsh 4.1 binary;
 * cylinder-panel-t3.msh: a cylindrical panel of radius 0.1 m, axis along
@@ -22,8 +27,8 @@ holding this script):
   characteristic length 0.02, Gmsh 4.1 binary; the mid-edge nodes lie on
   the sphere (OCC geometry, setOrder(2)).
 
-All meshes use Gmsh's Frontal-Delaunay 2D algorithm (no transfinite
-meshing). Only the triangles and their nodes are saved (one physical
+All meshes but the criss-cross plate use Gmsh's Frontal-Delaunay 2D
+algorithm (no transfinite meshing). Only the triangles and their nodes are saved (one physical
 surface "fabric"). Triangles are oriented consistently: counter-clockwise
 seen from +z on the plate (normal +z), normals pointing away from the axis
 on the cylinder and away from the centre on the sphere; the script
@@ -80,6 +85,16 @@ def build_plate(n):
     sides = [geo.addLine(corners[i], corners[(i + 1) % 4]) for i in range(4)]
     surface = geo.addPlaneSurface([geo.addCurveLoop(sides)])
     geo.synchronize()
+    return surface
+
+
+def build_plate_criss_cross(n):
+    """The square plate as a transfinite mesh of n x n squares, their
+    diagonals alternating; returns the surface tag."""
+    surface = build_plate(n)
+    for _, curve in gmsh.model.getEntities(1):
+        gmsh.model.mesh.setTransfiniteCurve(curve, n + 1)
+    gmsh.model.mesh.setTransfiniteSurface(surface, "Alternate")
     return surface
 
 
@@ -312,6 +327,9 @@ def main():
             outputs.append((f"plate-unstructured-{n}-t6.msh", 2, True))
         jobs.append((f"plate-{n}", lambda n=n: build_plate(n), None,
                      plate_normal, check_plate, outputs))
+    jobs.append(("plate-criss-cross", lambda: build_plate_criss_cross(16),
+                 None, plate_normal, check_plate,
+                 [("plate-criss-cross-16.msh", 1, False)]))
     jobs.append(("cylinder-panel", build_cylinder_panel, CYL_SIZE,
                  cylinder_normal, check_cylinder,
                  [("cylinder-panel-t3.msh", 1, False)]))

@@ -185,6 +185,51 @@ pub fn triangulate(mesh: &Mesh) -> (Vec<[usize; 3]>, Vec<usize>) {
     (triangles, owner)
 }
 
+/// How many interior nodes of `mesh` are corners of exactly four of its
+/// bending (sub-)triangles ([`triangulate`]), and how many interior nodes
+/// it has (those on no edge of a single triangle).
+///
+/// On a mesh whose squares alternate their diagonals (a criss-cross
+/// "checkerboard": Gmsh's transfinite `Alternate`), half the interior
+/// nodes are corners of four triangles and half of eight, and every
+/// triangle's quadratic surface is fitted through two lines of three
+/// nodes crossing at its four-triangle corner: its curvatures are second
+/// differences about that node. The eight-triangle nodes can then sit a
+/// little above or below the surface through the others (an `O(h^2)`
+/// offset) and cancel part of every triangle's curvature, and the plate
+/// bends too easily by a factor that refinement does not change (+72 %
+/// on the simply supported plate at 16 x 16 and 24 x 24 squares;
+/// docs/validation.md, "Criss-cross meshes"). A lone four-triangle node
+/// is a local soft spot that refinement shrinks.
+pub fn four_triangle_nodes(mesh: &Mesh) -> (usize, usize) {
+    let (triangles, _) = triangulate(mesh);
+    let n = mesh.nodes.len();
+    let mut corners = vec![0usize; n];
+    let mut edges: std::collections::HashMap<(usize, usize), usize> =
+        std::collections::HashMap::with_capacity(3 * triangles.len() / 2 + 1);
+    for tri in &triangles {
+        for m in 0..3 {
+            corners[tri[m]] += 1;
+            let (a, b) = (tri[m], tri[(m + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    let mut boundary = vec![false; n];
+    for (&(a, b), &count) in &edges {
+        if count == 1 {
+            boundary[a] = true;
+            boundary[b] = true;
+        }
+    }
+    let interior = (0..n).filter(|&a| !boundary[a] && corners[a] > 0);
+    let (mut four, mut all) = (0, 0);
+    for a in interior {
+        all += 1;
+        four += usize::from(corners[a] == 4);
+    }
+    (four, all)
+}
+
 /// The (sub-)triangles of a mesh ([`triangulate`]) and, for each, the
 /// node opposite each of its edges across the neighbouring triangle.
 struct Neighbours {
@@ -516,6 +561,42 @@ mod tests {
     use super::*;
     use crate::mesh::ElementOrder;
     use crate::mesh::generate::{Pattern, rectangle};
+
+    /// A `n x n` grid of unit squares whose diagonals alternate like a
+    /// checkerboard (Gmsh's transfinite `Alternate`): node `(x, y)`
+    /// is a corner of four triangles where `x + y` is odd, of eight
+    /// where it is even.
+    fn criss_cross(n: usize) -> Mesh {
+        let mesh =
+            crate::mesh::generate::grid([1.0, 1.0], [n, n], [0.0; 3], |i, j| (i + j) % 2 == 0);
+        mesh.validate().unwrap();
+        mesh
+    }
+
+    /// The criss-cross grid's interior nodes of odd `x + y` are the
+    /// corners of four triangles (4 of the 9 of a 4 x 4 grid, 24 of the
+    /// 49 of an 8 x 8); the rectangle's own patterns — the union jack
+    /// included, whose centre has eight — have none.
+    #[test]
+    fn four_triangle_nodes_find_a_criss_cross_mesh() {
+        assert_eq!(four_triangle_nodes(&criss_cross(4)), (4, 9));
+        assert_eq!(four_triangle_nodes(&criss_cross(8)), (24, 49));
+        for pattern in [Pattern::Right, Pattern::Left, Pattern::Alternate] {
+            for order in [ElementOrder::Linear, ElementOrder::Quadratic] {
+                let mesh = rectangle([1.0, 1.0], [8, 8], pattern, [0.0; 3], order);
+                let interior = if order == ElementOrder::Linear {
+                    49
+                } else {
+                    225
+                };
+                assert_eq!(
+                    four_triangle_nodes(&mesh),
+                    (0, interior),
+                    "{pattern:?} {order:?}"
+                );
+            }
+        }
+    }
 
     /// A triangle of a 3 x 3 grid split at its centroid (node 16, with
     /// three neighbours): the patch of a sub-triangle finds the same node

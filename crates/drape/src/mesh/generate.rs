@@ -30,6 +30,26 @@ pub fn rectangle(
     order: ElementOrder,
 ) -> Mesh {
     let [nx, ny] = divisions;
+    let linear = grid(size, divisions, center, |i, j| match pattern {
+        Pattern::Right => true,
+        Pattern::Left => false,
+        // Union jack: the diagonals point away from the centre.
+        Pattern::Alternate => (2 * i + 1 < nx) == (2 * j + 1 < ny),
+    });
+    elevate(&linear, order)
+}
+
+/// [`rectangle`]'s linear triangles with each square's diagonal chosen by
+/// `right(i, j)` for square `(i, j)` (`i` along x from the min corner):
+/// `true` from its min to its max corner, `false` the other one. Node
+/// `(i, j)` of the lattice is node `j (divisions[0] + 1) + i`.
+pub fn grid(
+    size: [f64; 2],
+    divisions: [usize; 2],
+    center: [f64; 3],
+    right: impl Fn(usize, usize) -> bool,
+) -> Mesh {
+    let [nx, ny] = divisions;
     let mut nodes = Vec::with_capacity((nx + 1) * (ny + 1));
     for j in 0..=ny {
         for i in 0..=nx {
@@ -45,25 +65,18 @@ pub fn rectangle(
     for j in 0..ny {
         for i in 0..nx {
             let (p00, p10, p11, p01) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            let right = match pattern {
-                Pattern::Right => true,
-                Pattern::Left => false,
-                // Union jack: the diagonals point away from the centre.
-                Pattern::Alternate => (2 * i + 1 < nx) == (2 * j + 1 < ny),
-            };
-            if right {
+            if right(i, j) {
                 connectivity.extend_from_slice(&[p00, p10, p11, p00, p11, p01]);
             } else {
                 connectivity.extend_from_slice(&[p00, p10, p01, p10, p11, p01]);
             }
         }
     }
-    let linear = Mesh {
+    Mesh {
         nodes,
         order: ElementOrder::Linear,
         connectivity,
-    };
-    elevate(&linear, order)
+    }
 }
 
 /// A disc of radius `radius` centred on `center` in the plane `z =
