@@ -3,9 +3,7 @@
 //! weight put on in 20 static increments, the projected Newton leading
 //! each downhill) folds and measures a drape coefficient within the spread
 //! that the dynamic settles of the same disc show (docs/validation.md:
-//! 0.536–0.600, widened by 0.02), in fewer than 1,000 Newton iterations;
-//! and the hints a failed settle of the drape tester gives, static or
-//! dynamic with friction.
+//! 0.536–0.600, widened by 0.02), in fewer than 1,000 Newton iterations.
 
 use serde_json::Value;
 use std::path::Path;
@@ -102,38 +100,5 @@ fn a_gripped_specimen_fails_statically_with_the_fabric_hint() {
     }
     assert!(!stderr.contains("prestress"), "{stderr}");
     assert!(out.join("summary.json").exists() && out.join("history.csv").exists());
-    std::fs::remove_dir_all(&dir).unwrap();
-}
-
-/// A dynamic run with friction whose step fails (the gripped tester at 4
-/// rings with Newton allowed one iteration) names `[contact]
-/// stick_speed` in its hint (docs/validation.md, "The fabric library on
-/// a finer mesh"); the same run without friction does not.
-#[test]
-fn a_dynamic_failure_with_friction_names_the_stick_speed() {
-    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/drape-tester.toml");
-    let text = std::fs::read_to_string(&example)
-        .unwrap()
-        .replace("rings = 15", "rings = 4");
-    let dir = std::env::temp_dir().join(format!("drape-friction-hint-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    for (name, friction) in [("with", "friction = 0.3"), ("without", "friction = 0.0")] {
-        let scenario_text = format!(
-            "{}\n[solver]\nmax_iterations = 1\n",
-            text.replace("friction = 0.3", friction)
-        );
-        assert!(scenario_text.contains("rings = 4") && scenario_text.contains(friction));
-        let scenario = dir.join(format!("{name}.toml"));
-        std::fs::write(&scenario, scenario_text).unwrap();
-        let run = run(&scenario, &dir.join(name));
-        assert_eq!(run.status.code(), Some(1), "{name}");
-        let stderr = String::from_utf8_lossy(&run.stderr);
-        assert_eq!(
-            stderr.contains("[contact] stick_speed"),
-            name == "with",
-            "{name}: {stderr}"
-        );
-    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

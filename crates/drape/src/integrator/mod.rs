@@ -260,6 +260,8 @@ impl StepEnergies {
 pub(crate) struct StepTerms<'a> {
     /// `1 / (beta dt^2)`, or 0 in statics (no inertia).
     pub c: f64,
+    /// `Q_s` (dynamic) or empty (static).
+    pub q: &'a [f64],
     /// `M Q_s` (dynamic) or empty (static).
     pub mq: &'a [f64],
     /// Dead external forces of this step.
@@ -297,7 +299,12 @@ fn step_potential<'a>(
         f_ext,
     )));
     if terms.c != 0.0 {
-        list.push(Box::new(InertiaTerm::new(model, terms.c, terms.mq, my)));
+        list.push(Box::new(InertiaTerm::new(
+            model,
+            terms.c,
+            (terms.q, terms.mq),
+            my,
+        )));
     }
     if let Some(contact) = model.contact() {
         if let ContactMethod::Penalty { stiffness } = contact.method {

@@ -194,6 +194,7 @@ impl Newmark {
         }
         let terms = StepTerms {
             c,
+            q: &ws.q,
             mq: &ws.mq,
             dead: &ws.dead,
             pressure: model.pressure_at(t1, None),

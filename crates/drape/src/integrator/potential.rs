@@ -330,7 +330,7 @@ mod tests {
             let potential = IncrementalPotential::new(vec![
                 Box::new(MembraneTerm::new(&model)),
                 Box::new(BendingTerm::new(bending, model.pattern())),
-                Box::new(InertiaTerm::new(&model, 1e4, &mq, &mut my)),
+                Box::new(InertiaTerm::new(&model, 1e4, (&q, &mq), &mut my)),
             ]);
             let mut whole = Whole(potential);
             let ctx = StepContext {
@@ -369,7 +369,7 @@ mod tests {
             let potential = IncrementalPotential::new(vec![
                 Box::new(MembraneTerm::new(&model)),
                 Box::new(LoadTerm::new(&model, &dead, pressure, &mut f_ext)),
-                Box::new(InertiaTerm::new(&model, 1e4, &mq, &mut my)),
+                Box::new(InertiaTerm::new(&model, 1e4, (&q, &mq), &mut my)),
             ]);
             assert_eq!(potential.names(), ["membrane", "loads", "inertia"]);
             let mut whole = Whole(potential);

@@ -40,6 +40,7 @@ impl StaticStepper {
         ws.y.copy_from_slice(&state.positions);
         let terms = StepTerms {
             c: 0.0,
+            q: &[],
             mq: &[],
             dead: &ws.dead,
             pressure: model.pressure_at(lambda, Some(lambda)),

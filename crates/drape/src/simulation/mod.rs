@@ -680,14 +680,6 @@ impl Stepper<'_, '_> {
     }
 
     /// The error of a step that failed at size `h` after `cutbacks` halvings.
-    /// Whether any obstacle has friction.
-    fn has_friction(&self) -> bool {
-        self.setup
-            .model
-            .contact()
-            .is_some_and(|c| (0..c.bodies.len()).any(|k| c.friction_of(k) > 0.0))
-    }
-
     fn step_failure(&self, h: f64, cutbacks: usize, cause: NewtonError) -> RunError {
         if let NewtonError::MaterialInstability { element, stretch } = cause {
             return RunError::MaterialInstability {
@@ -704,13 +696,7 @@ impl Stepper<'_, '_> {
             cutbacks,
             cause,
             hint: if !matches!(self.setup.analysis, Analysis::Static { .. }) {
-                if self.has_friction() {
-                    // docs/validation.md, "The fabric library on a finer
-                    // mesh": 5 of 6 stall at t = 0.13 s with 1e-3.
-                    "; with friction, nodes sliding over an obstacle's rim or side can stall Newton as the steps shrink, since the slip below which they stick, [contact] stick_speed x dt, shrinks with them: a larger stick_speed (1e-2 m/s settles the fabric library on 30-ring discs, where 1e-3 stalls) lets the step converge, at the price of a faster creep of what sticks".into()
-                } else {
-                    String::new()
-                }
+                String::new()
             } else if self.setup.model.bending().is_some() {
                 // A fabric with bending has stiffness across its plane;
                 // what stalls is the loading path through its buckling.
