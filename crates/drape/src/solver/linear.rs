@@ -713,7 +713,9 @@ impl LinearSolver {
         // in the Cholesky solve: a few steps of iterative refinement with
         // the factor recover them (each a solve with the factor and a
         // product), where they are needed only.
-        if used == Factorization::Cholesky && residual.is_finite() {
+        // (The correction's buffer is made only then: most solves need
+        // none, and this runs at every Newton iteration.)
+        if used == Factorization::Cholesky && residual.is_finite() && residual > 1e-6 * b_norm {
             let mut correction = Mat::zeros(self.dimension(), 1);
             for _ in 0..REFINEMENTS {
                 if residual <= 1e-6 * b_norm {
