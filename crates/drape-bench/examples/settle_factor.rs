@@ -31,11 +31,8 @@ fn main() {
         .unwrap_or_else(|| {
             Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/settle-bending-t3.toml")
         });
-    let text = std::fs::read_to_string(&path).unwrap();
-    let s = Scenario::parse(&text, &path)
-        .unwrap()
-        .build(&path, &text)
-        .unwrap();
+    let (scenario, text) = Scenario::read(&path).unwrap();
+    let s = scenario.build(&path, &text).unwrap();
     let model = &s.model;
     let y = model.initial_positions();
     let mut f = vec![0.0; model.dofs()];

@@ -153,6 +153,27 @@ fn hold(count: usize, nodes: impl IntoIterator<Item = usize>) -> Vec<bool> {
     fixed
 }
 
+/// A strip `l` x 0.02 m along x from the origin, in `divisions` squares of
+/// `pattern` and elements of `order`: the mesh, its nodes within `1.5 h`
+/// of the start (`held`, and all their components), and its tip's nodes
+/// (`x = l`).
+fn strip(
+    l: f64,
+    divisions: [usize; 2],
+    pattern: Pattern,
+    order: ElementOrder,
+    h: f64,
+) -> (Mesh, Vec<bool>, Vec<bool>, Vec<usize>) {
+    let mesh = rectangle([l, 0.02], divisions, pattern, [0.5 * l, 0.0, 0.0], order);
+    let count = mesh.node_count();
+    let held: Vec<bool> = mesh.nodes.iter().map(|x| x[0] < 1.5 * h).collect();
+    let fixed = hold(count, (0..count).filter(|&a| held[a]));
+    let tip: Vec<usize> = (0..count)
+        .filter(|&a| (mesh.nodes[a][0] - l).abs() < 1e-12)
+        .collect();
+    (mesh, held, fixed, tip)
+}
+
 /// Least-squares slope of log(error) against log(h).
 fn rate(h: &[f64], err: &[f64]) -> f64 {
     let n = h.len() as f64;
@@ -357,19 +378,7 @@ fn cantilever_held(
     (clamp, pattern): (bool, Pattern),
 ) -> (f64, f64) {
     let h = l / divisions as f64;
-    let mesh = rectangle(
-        [l, 0.02],
-        [divisions, 4],
-        pattern,
-        [0.5 * l, 0.0, 0.0],
-        ElementOrder::Linear,
-    );
-    let count = mesh.node_count();
-    let held: Vec<bool> = mesh.nodes.iter().map(|x| x[0] < 1.5 * h).collect();
-    let fixed = hold(count, (0..count).filter(|&a| held[a]));
-    let tip: Vec<usize> = (0..count)
-        .filter(|&a| (mesh.nodes[a][0] - l).abs() < 1e-12)
-        .collect();
+    let (mesh, held, fixed, tip) = strip(l, [divisions, 4], pattern, ElementOrder::Linear, h);
     let clamped = if clamp { held } else { Vec::new() };
     let m = clamped_model(mesh, (2e6, 6e-4, 320.0, 9.81), fixed, clamped, rigidity);
     let (y, its) = equilibrium(&m, increments);
@@ -666,19 +675,7 @@ fn lattice_cantilever(
     let b = Q * free.powi(3) / ratio;
     let t = 6e-4;
     let k = order.degree();
-    let mesh = rectangle(
-        [l, 0.02],
-        [along / k, across / k],
-        Pattern::Right,
-        [0.5 * l, 0.0, 0.0],
-        order,
-    );
-    let count = mesh.node_count();
-    let held: Vec<bool> = mesh.nodes.iter().map(|x| x[0] < 1.5 * h).collect();
-    let fixed = hold(count, (0..count).filter(|&a| held[a]));
-    let tip: Vec<usize> = (0..count)
-        .filter(|&a| (mesh.nodes[a][0] - l).abs() < 1e-12)
-        .collect();
+    let (mesh, held, fixed, tip) = strip(l, [along / k, across / k], Pattern::Right, order, h);
     let m = membrane_model(
         mesh,
         (et / t, t, 320.0, 9.81),

@@ -11,10 +11,8 @@
 mod common;
 
 use drape::bending::BendingRigidity;
-use drape::element::membrane::Section;
 use drape::integrator::newmark::DynamicWorkspace;
 use drape::integrator::{State, StaticStepper};
-use drape::material::SaintVenantKirchhoff;
 use drape::mesh::ElementOrder;
 use drape::mesh::generate::{Pattern, rectangle};
 use drape::model::Model;
@@ -40,19 +38,11 @@ fn strut() -> (Model, Vec<bool>) {
         .map(|x| x[0] < 1e-9 || x[0] > L - 1e-9)
         .collect();
     let fixed: Vec<bool> = (0..3 * count).map(|k| held[k / 3]).collect();
-    let model = Model::builder(
-        mesh,
-        Box::new(SaintVenantKirchhoff::new(2.0e6, 0.3)),
-        Section {
-            thickness: 6e-4,
-            prestress: 0.0,
-        },
-        320.0,
-    )
-    .fixed(fixed)
-    .bending(BendingRigidity::Isotropic(1e-5))
-    .build()
-    .unwrap();
+    let model = common::fabric_model(mesh)
+        .fixed(fixed)
+        .bending(BendingRigidity::Isotropic(1e-5))
+        .build()
+        .unwrap();
     (model, held)
 }
 

@@ -3,12 +3,10 @@
 mod common;
 
 use common::{column, fabric, read_history, setup, temp_dir};
-use drape::element::membrane::Section;
 use drape::fd::jacobian_error;
 use drape::integrator::Newmark;
 use drape::integrator::newmark::DynamicWorkspace;
 use drape::load::{Load, LoadKind};
-use drape::material::SaintVenantKirchhoff;
 use drape::mesh::generate::{Pattern, rectangle};
 use drape::mesh::{ElementOrder, Mesh};
 use drape::model::{MassKind, Model};
@@ -16,20 +14,12 @@ use drape::simulation::{reference_length, run};
 use drape::solver::NewtonSettings;
 
 fn model(mesh: Mesh, loads: Vec<Load>, fixed: Vec<bool>, mass: MassKind) -> Model {
-    Model::builder(
-        mesh,
-        Box::new(SaintVenantKirchhoff::new(2.0e6, 0.3)),
-        Section {
-            thickness: 6e-4,
-            prestress: 0.0,
-        },
-        320.0,
-    )
-    .loads(loads)
-    .fixed(fixed)
-    .mass(mass)
-    .build()
-    .unwrap()
+    common::fabric_model(mesh)
+        .loads(loads)
+        .fixed(fixed)
+        .mass(mass)
+        .build()
+        .unwrap()
 }
 
 /// Consistent T3 mass: `rho t A / 12 [[2, 1, 1], [1, 2, 1], [1, 1, 2]]`

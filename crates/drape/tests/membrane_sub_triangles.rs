@@ -9,8 +9,6 @@ mod common;
 
 use drape::bending::triangulate;
 use drape::element::geometry::MembraneIntegration;
-use drape::element::membrane::Section;
-use drape::material::SaintVenantKirchhoff;
 use drape::mesh::generate::{Pattern, rectangle};
 use drape::mesh::{ElementOrder, Mesh};
 use drape::model::Model;
@@ -18,18 +16,10 @@ use drape::model::Model;
 /// A membrane model of `mesh` (E = 2 MPa, 0.6 mm, no load) whose curved
 /// elements measure their membrane as `membrane`.
 fn membrane(mesh: Mesh, membrane: MembraneIntegration) -> Model {
-    Model::builder(
-        mesh,
-        Box::new(SaintVenantKirchhoff::new(2.0e6, 0.3)),
-        Section {
-            thickness: 6e-4,
-            prestress: 0.0,
-        },
-        320.0,
-    )
-    .membrane(membrane)
-    .build()
-    .unwrap()
+    common::fabric_model(mesh)
+        .membrane(membrane)
+        .build()
+        .unwrap()
 }
 
 /// Positions `x` moved by a smooth out-of-plane bend and an in-plane

@@ -1,6 +1,10 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+use drape::element::membrane::Section;
+use drape::material::SaintVenantKirchhoff;
+use drape::mesh::Mesh;
+use drape::model::{Model, ModelBuilder};
 use drape::scenario::Scenario;
 use drape::setup::Setup;
 use std::path::{Path, PathBuf};
@@ -67,6 +71,22 @@ pub fn read_history(dir: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 pub fn column(header: &[String], rows: &[Vec<f64>], name: &str) -> Vec<f64> {
     let k = header.iter().position(|h| h == name).unwrap();
     rows.iter().map(|r| r[k]).collect()
+}
+
+/// The model of `mesh` in the reference problem's material —
+/// Saint-Venant–Kirchhoff, E = 2 MPa, nu = 0.3, 0.6 mm thick, no
+/// prestress, 320 kg/m³ — to be completed by the caller (loads, supports,
+/// bending, ...).
+pub fn fabric_model(mesh: Mesh) -> ModelBuilder {
+    Model::builder(
+        mesh,
+        Box::new(SaintVenantKirchhoff::new(2.0e6, 0.3)),
+        Section {
+            thickness: 6e-4,
+            prestress: 0.0,
+        },
+        320.0,
+    )
 }
 
 /// A 20 x 20 fabric of the reference problem's material, with extra TOML.
