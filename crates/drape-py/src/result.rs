@@ -23,16 +23,19 @@ use std::path::{Path, PathBuf};
 /// case (``DIR/cases/NNNN``).
 #[pyclass(module = "drape", name = "RunResult", frozen)]
 pub struct RunResult {
+    /// Absolute: the history and the frames are read lazily, and must be
+    /// this run's even after the caller changes its working directory.
     out: PathBuf,
     summary: Py<PyDict>,
     history: PyOnceLock<Py<PyDict>>,
 }
 
 impl RunResult {
-    /// The result of the run that wrote `out`, with its summary.
+    /// The result of the run that wrote `out`, with its summary; `out` is
+    /// made absolute against the working directory of now.
     pub fn new(out: PathBuf, summary: Py<PyDict>) -> Self {
         Self {
-            out,
+            out: absolute(out),
             summary,
             history: PyOnceLock::new(),
         }
@@ -40,6 +43,7 @@ impl RunResult {
 
     /// Opens `out`, reading its `summary.json`.
     pub fn open(py: Python<'_>, out: PathBuf) -> PyResult<Self> {
+        let out = absolute(out);
         let path = out.join("summary.json");
         let text = std::fs::read_to_string(&path).map_err(|e| {
             output_error(
@@ -73,7 +77,8 @@ impl RunResult {
         Self::open(py, out)
     }
 
-    /// The output directory (pathlib.Path).
+    /// The output directory (pathlib.Path), absolute: made so against the
+    /// working directory when the run started or the result was opened.
     #[getter]
     fn out(&self) -> PathBuf {
         self.out.clone()
@@ -170,6 +175,13 @@ impl RunResult {
             item("time")
         )
     }
+}
+
+/// `path` joined to the working directory if relative (not resolved: a
+/// symbolic link stays as named); as given if that fails (an empty path,
+/// or no working directory), to be refused by whoever opens it.
+pub fn absolute(path: PathBuf) -> PathBuf {
+    std::path::absolute(&path).unwrap_or(path)
 }
 
 /// A reader's error: a missing file is an `OSError`, a step without a

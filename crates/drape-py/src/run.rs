@@ -16,7 +16,7 @@
 
 use crate::errors::{output_error, run_error, scenario_error};
 use crate::input::Source;
-use crate::result::{RunResult, json_to_py};
+use crate::result::{RunResult, absolute, json_to_py};
 use drape::output::directory::DirectoryError;
 use drape::simulation::{self, Front, RunError, Session, StepInfo};
 use pyo3::exceptions::{PyKeyboardInterrupt, PyValueError};
@@ -78,6 +78,9 @@ pub fn run(
             ));
         }
     };
+    // Absolute from here on: the run, its messages and the result it
+    // returns name one directory whatever the working directory becomes.
+    let out = absolute(out);
     let from_dict = matches!(source, Source::Dict(_));
     let directory_error = |e: DirectoryError| output_error(py, e.to_string(), &out);
     let (session, loaded) = if resume {

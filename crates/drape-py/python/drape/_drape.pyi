@@ -21,7 +21,8 @@ class RunResult:
     def __init__(self, out: Union[str, "os.PathLike[str]"]) -> None: ...
     @property
     def out(self) -> Path:
-        """The output directory."""
+        """The output directory, absolute (against the working directory
+        when the run started or the result was opened)."""
     @property
     def summary(self) -> Dict[str, Any]:
         """``summary.json`` as a dict (``status``, ``message``, ``steps``,
