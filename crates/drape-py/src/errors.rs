@@ -101,7 +101,7 @@ fn leading_key(message: &str) -> Option<String> {
 }
 
 /// `drape.RunError`: the run stopped; `result` opens what it wrote, when
-/// it wrote a summary.
+/// it wrote anything (its summary None if that could not be written).
 pub fn run_error(py: Python<'_>, message: String, out: &Path) -> PyErr {
     let result = crate::result::RunResult::open(py, out.to_path_buf())
         .ok()

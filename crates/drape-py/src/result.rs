@@ -7,6 +7,7 @@
 //! it); the frames are read when asked for.
 
 use crate::errors::output_error;
+use drape::output::directory::SCENARIO_PATH;
 use drape_render::{FrameSelect, History, OutputDir, RenderError};
 use numpy::ndarray::Array2;
 use numpy::{PyArray1, PyArray2};
@@ -15,6 +16,14 @@ use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyList};
 use std::path::{Path, PathBuf};
+
+/// The summary a run writes when it ends, however it ends.
+const SUMMARY: &str = "summary.json";
+
+/// The outputs of which one marks a directory as a run's when it has no
+/// summary: a run in progress, or one killed before it wrote its summary
+/// (`scenario.path` is written before the first step).
+const RUN_OUTPUTS: [&str; 3] = ["history.csv", "fields.pvd", SCENARIO_PATH];
 
 /// The outputs of a run: ``summary``, ``history`` and ``positions(step)``.
 ///
@@ -26,14 +35,15 @@ pub struct RunResult {
     /// Absolute: the history and the frames are read lazily, and must be
     /// this run's even after the caller changes its working directory.
     out: PathBuf,
-    summary: Py<PyDict>,
+    /// None for a run without `summary.json`: in progress, or killed.
+    summary: Option<Py<PyDict>>,
     history: PyOnceLock<Py<PyDict>>,
 }
 
 impl RunResult {
     /// The result of the run that wrote `out`, with its summary; `out` is
     /// made absolute against the working directory of now.
-    pub fn new(out: PathBuf, summary: Py<PyDict>) -> Self {
+    pub fn new(out: PathBuf, summary: Option<Py<PyDict>>) -> Self {
         Self {
             out: absolute(out),
             summary,
@@ -41,21 +51,33 @@ impl RunResult {
         }
     }
 
-    /// Opens `out`, reading its `summary.json`.
+    /// Opens `out`, reading its `summary.json`; a run in progress, or one
+    /// killed before it wrote its summary (SIGKILL, the OOM killer), has
+    /// none and opens with `summary` None, from its other outputs.
     pub fn open(py: Python<'_>, out: PathBuf) -> PyResult<Self> {
         let out = absolute(out);
-        let path = out.join("summary.json");
-        let text = std::fs::read_to_string(&path).map_err(|e| {
-            output_error(
-                py,
-                format!(
-                    "{}: {e}; is {} the output directory of a drape run?",
-                    path.display(),
-                    out.display()
-                ),
-                &out,
-            )
-        })?;
+        let path = out.join(SUMMARY);
+        let not_a_run = |why: String| {
+            let message = format!(
+                "{why}; is {} the output directory of a drape run?",
+                out.display()
+            );
+            output_error(py, message, &out)
+        };
+        let text = match std::fs::read_to_string(&path) {
+            Ok(text) => text,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound && out.is_dir() => {
+                if !RUN_OUTPUTS.iter().any(|f| out.join(f).is_file()) {
+                    let [a, b, c] = RUN_OUTPUTS;
+                    return Err(not_a_run(format!(
+                        "{}: no {SUMMARY}, {a}, {b} or {c}",
+                        out.display()
+                    )));
+                }
+                return Ok(Self::new(out, None));
+            }
+            Err(e) => return Err(not_a_run(format!("{}: {e}", path.display()))),
+        };
         // Python's own parser: serde_json's default one may round the last
         // bit of a float (its exact parser is a feature of its own).
         let summary = py
@@ -66,7 +88,7 @@ impl RunResult {
             .map_err(|_| {
                 output_error(py, format!("{}: not a JSON object", path.display()), &out)
             })?;
-        Ok(Self::new(out, summary.unbind()))
+        Ok(Self::new(out, Some(summary.unbind())))
     }
 }
 
@@ -87,10 +109,14 @@ impl RunResult {
     /// ``summary.json`` as a dict: ``status``, ``message``, ``steps``,
     /// ``time``, ``first_contact_time``, ``newton_iterations``,
     /// ``wall_seconds``, ``nodes``, ``elements``, ``dofs``, ``monitors``
-    /// (name -> final ``[x, y, z]``) and more (README, "Outputs").
+    /// (name -> final ``[x, y, z]``) and more (README, "Outputs"); None
+    /// when the directory has no ``summary.json``: a run still in
+    /// progress, or one killed (SIGKILL, out of memory) before it could
+    /// write it. As the file was when the result was made: open the
+    /// directory again to see a later summary.
     #[getter]
-    fn summary(&self, py: Python<'_>) -> Py<PyDict> {
-        self.summary.clone_ref(py)
+    fn summary(&self, py: Python<'_>) -> Option<Py<PyDict>> {
+        self.summary.as_ref().map(|s| s.clone_ref(py))
     }
 
     /// ``history.csv`` as a dict: column name -> 1-D float64 array, one
@@ -158,7 +184,11 @@ impl RunResult {
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {
-        let summary = self.summary.bind(py);
+        let out = format!("{:?}", self.out.display().to_string());
+        let Some(summary) = &self.summary else {
+            return format!("RunResult(out={out}, summary=None)");
+        };
+        let summary = summary.bind(py);
         let item = |key: &str| {
             summary
                 .get_item(key)
@@ -168,8 +198,7 @@ impl RunResult {
                 .unwrap_or_else(|| "None".into())
         };
         format!(
-            "RunResult(out={:?}, status={}, steps={}, time={})",
-            self.out.display().to_string(),
+            "RunResult(out={out}, status={}, steps={}, time={})",
             item("status"),
             item("steps"),
             item("time")

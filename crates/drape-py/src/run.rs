@@ -145,7 +145,7 @@ pub fn run(
             let value = serde_json::to_value(&summary)
                 .map_err(|e| PyValueError::new_err(format!("summary: {e}")))?;
             let summary = json_to_py(py, &value)?.cast_into::<PyDict>()?;
-            Ok(RunResult::new(out, summary.unbind()))
+            Ok(RunResult::new(out, Some(summary.unbind())))
         }
         Err(RunError::Interrupted { message }) => {
             let hint = format!(

@@ -3,13 +3,16 @@ a sweep keeps a user's files, a refused run leaves nothing behind."""
 
 from __future__ import annotations
 
-import os
+import signal
+import subprocess
+import time
 
 import numpy as np
+import pytest
 
 import drape
 
-from conftest import short_pedestal
+from conftest import short_pedestal, write_scenario
 
 
 def test_a_result_reads_its_own_run_after_a_change_of_directory(tmp_path, monkeypatch):
@@ -31,3 +34,41 @@ def test_a_result_reads_its_own_run_after_a_change_of_directory(tmp_path, monkey
         assert steps == 40
         np.testing.assert_array_equal(result.history["step"], np.arange(steps + 1))
         assert result.frames == [0, 10, 20, 30, 40]
+
+
+def test_a_run_in_progress_or_killed_opens_with_no_summary(cli, tmp_path):
+    # A long pedestal run killed by SIGKILL mid-way: history, frames and
+    # scenario on disk, no summary.json. It opens (as measure, plot and
+    # render read it), its summary None.
+    doc = short_pedestal()
+    doc["time"]["segments"] = [{"steps": 10, "dt": 0.01}, {"steps": 30000, "dt": 1.0e-4}]
+    scenario = write_scenario(doc, tmp_path / "long.toml")
+    out = tmp_path / "run"
+    child = subprocess.Popen([str(cli), "run", "--quiet", str(scenario), "--out", str(out)])
+    history = out / "history.csv"
+    deadline = time.monotonic() + 60
+    try:
+        while time.monotonic() < deadline and (not history.is_file() or history.read_text().count("\n") < 45):
+            assert child.poll() is None, "the run ended before it was killed"
+            time.sleep(0.02)
+        # In progress: no summary yet.
+        running = drape.RunResult(out)
+        assert running.summary is None
+        assert running.frames[:5] == [0, 10, 20, 30, 40]
+    finally:
+        child.send_signal(signal.SIGKILL)
+        child.wait(timeout=60)
+    assert not (out / "summary.json").exists()
+    killed = drape.RunResult(out)
+    assert killed.summary is None and killed.out == out
+    rows = len(killed.history["step"])
+    assert rows >= 45
+    np.testing.assert_array_equal(killed.history["step"], np.arange(rows))
+    assert killed.frames[0] == 0 and killed.positions().shape == killed.positions(0).shape
+    assert "summary=None" in repr(killed)
+    # A directory that holds no run is still refused, saying what it lacks.
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(drape.OutputError, match="no summary.json, history.csv"):
+        drape.RunResult(tmp_path / "empty")
+    with pytest.raises(drape.OutputError, match="output directory of a drape run"):
+        drape.RunResult(tmp_path / "absent")

@@ -2,7 +2,7 @@
 
 import os
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, Union
+from typing import Any, Dict, List, Mapping, Optional, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -24,11 +24,13 @@ class RunResult:
         """The output directory, absolute (against the working directory
         when the run started or the result was opened)."""
     @property
-    def summary(self) -> Dict[str, Any]:
+    def summary(self) -> Optional[Dict[str, Any]]:
         """``summary.json`` as a dict (``status``, ``message``, ``steps``,
         ``time``, ``first_contact_time``, ``newton_iterations``,
         ``wall_seconds``, ``nodes``, ``elements``, ``dofs``, ``monitors``
-        and more)."""
+        and more); None without ``summary.json`` (a run in progress, or
+        killed before it wrote it), as the file was when the result was
+        made."""
     @property
     def history(self) -> Dict[str, npt.NDArray[np.float64]]:
         """``history.csv``: column name -> 1-D float64 array, one entry per

@@ -70,7 +70,8 @@ class RunError(DrapeError, RuntimeError):
         message: what happened.
         out: the output directory.
         result: a ``RunResult`` of what the run wrote (its summary says
-            ``"failed"``), or None when it wrote no summary.
+            ``"failed"``; None where the summary itself could not be
+            written), or None when it wrote nothing.
     """
 
     def __init__(self, message: str, *, out: Optional[Path] = None, result: Any = None) -> None:
