@@ -72,7 +72,9 @@ def sweep(
         ``<monitor>_x``/``_y``/``_z`` (final positions) and ``message``.
 
     Raises:
-        SweepError: the sweep file cannot be run (nothing ran).
+        SweepError: the sweep file cannot be run, or ``out`` holds a
+            ``results.csv`` that is not a sweep's (nothing ran, nothing was
+            written).
         ImportError: the engine's package is not installed (nothing ran).
         KeyboardInterrupt: Ctrl-C, after ``results.csv`` was written with
             what was done; calling it again finishes the sweep.

@@ -18,7 +18,9 @@ the validation message as the command line prints it, while the others go
 on.
 
 Each case runs in ``DIR/cases/NNNN/`` (its ``scenario.toml`` and the run's
-outputs); ``DIR/results.csv`` has a row per case. A case whose directory
+outputs); ``DIR/results.csv`` has a row per case. A ``results.csv`` already
+in ``DIR`` that a sweep did not write is refused, as a run refuses files it
+did not write (:func:`_take_directory`). A case whose directory
 holds a completed run of the same scenario text is not run again, and an
 interrupted one (Ctrl-C: a checkpoint) resumes, so running a sweep again
 finishes what a killed or interrupted one left.
@@ -265,6 +267,7 @@ def sweep(
     cpus = os.cpu_count() or 1
     workers = workers or cpus
 
+    results = _take_directory(out)
     rows: Dict[int, Dict[str, Any]] = {}
     todo: List[Case] = []
     for case in plan.cases:
@@ -274,8 +277,6 @@ def sweep(
         else:
             todo.append(case)
     skipped = len(rows)
-    (out / "cases").mkdir(parents=True, exist_ok=True)
-    results = out / "results.csv"
 
     # One thread a case when the cases fill the cores (results do not
     # depend on the threads: the library's sums are in a fixed order).
@@ -315,6 +316,36 @@ def sweep(
         bar.close()
         _write_results(results, plan, rows)
     return [rows[case.index] for case in plan.cases]
+
+
+def _take_directory(out: Path) -> Path:
+    """Makes ``out/cases`` (where missing) and returns the path of
+    ``results.csv``, which must be absent or a sweep's own
+    (:func:`_is_sweeps`): a sweep replaces it. SweepError, with nothing
+    written, for a ``results.csv`` of someone else's."""
+    results = out / "results.csv"
+    if (results.exists() or results.is_symlink()) and not _is_sweeps(results):
+        raise SweepError(
+            f"{results}: not a sweep's results.csv (a sweep's starts with the columns case,status and lies "
+            f"beside its cases directory), and a sweep would replace it: choose another directory "
+            f"(--out; out= from Python), or move it away"
+        )
+    (out / "cases").mkdir(parents=True, exist_ok=True)
+    return results
+
+
+def _is_sweeps(results: Path) -> bool:
+    """Whether ``results`` is a file a sweep wrote: its header starts with
+    the columns ``case,status`` (:func:`_columns`), and it lies beside the
+    ``cases`` directory, which a sweep makes before it writes any row."""
+    if not results.is_file() or not (results.parent / "cases").is_dir():
+        return False
+    try:
+        with open(results, newline="", encoding="utf-8") as f:
+            header = next(csv.reader([f.readline()]), [])
+    except (OSError, UnicodeDecodeError):
+        return False
+    return header[:2] == ["case", "status"]
 
 
 def _completed(case_dir: Path, text: str) -> Optional[Dict[str, Any]]:
