@@ -121,3 +121,21 @@ def test_a_sweep_keeps_a_users_own_results_csv(tmp_path):
     assert summary.stat().st_mtime_ns == before
     assert read_csv(out / "results.csv")[0]["status"] == "completed"
 
+
+def test_a_sweep_into_a_file_is_one_line_and_exit_2(tmp_path):
+    sweep = one_case_sweep(tmp_path)
+    a_file = tmp_path / "a-file"
+    a_file.write_text("mine")
+    done = run_module("sweep", str(sweep), "--out", str(a_file), cwd=tmp_path)
+    assert done.returncode == 2, done
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr, done.stderr
+    assert str(a_file) in done.stderr and "not a directory" in done.stderr
+    assert a_file.read_text() == "mine"
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "cases").write_text("mine")
+    done = run_module("sweep", str(sweep), "--out", str(out), cwd=tmp_path)
+    assert done.returncode == 2, done
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr, done.stderr
+    assert str(out / "cases") in done.stderr and "not a directory" in done.stderr
+    assert sorted(p.name for p in out.iterdir()) == ["cases"]

@@ -72,9 +72,10 @@ def sweep(
         ``<monitor>_x``/``_y``/``_z`` (final positions) and ``message``.
 
     Raises:
-        SweepError: the sweep file cannot be run, or ``out`` holds a
-            ``results.csv`` that is not a sweep's (nothing ran, nothing was
-            written).
+        SweepError: the sweep file cannot be run, or ``out`` cannot be
+            used: a file where it or ``out/cases`` should be, or a
+            ``results.csv`` there that is not a sweep's (nothing ran, nothing
+            was written).
         ImportError: the engine's package is not installed (nothing ran).
         KeyboardInterrupt: Ctrl-C, after ``results.csv`` was written with
             what was done; calling it again finishes the sweep.

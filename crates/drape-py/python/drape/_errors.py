@@ -100,8 +100,8 @@ class SweepError(DrapeError, ValueError):
     """A sweep file that cannot be run, found before any case runs: a
     missing or unreadable base scenario, a dotted key the scenario does not
     have, lists of unequal length in ``zip`` mode, values of a type the key
-    does not take; or a sweep directory holding a ``results.csv`` that is
-    not a sweep's.
+    does not take; or a sweep directory that cannot be used (a file where
+    it or its ``cases`` should be, a ``results.csv`` that is not a sweep's).
 
     Attributes:
         message: what is wrong, naming the sweep file and the parameter.

@@ -319,10 +319,18 @@ def sweep(
 
 
 def _take_directory(out: Path) -> Path:
-    """Makes ``out/cases`` (where missing) and returns the path of
-    ``results.csv``, which must be absent or a sweep's own
+    """Makes ``out`` and ``out/cases`` (where missing) and returns the path
+    of ``results.csv``, which must be absent or a sweep's own
     (:func:`_is_sweeps`): a sweep replaces it. SweepError, with nothing
-    written, for a ``results.csv`` of someone else's."""
+    written, for a file where a directory goes, a ``results.csv`` of
+    someone else's, or a directory that cannot be made."""
+    cases = out / "cases"
+    for path in (out, cases):
+        if path.exists() and not path.is_dir():
+            raise SweepError(
+                f"cannot use {path} as the sweep's {'directory' if path == out else 'cases directory'}: "
+                f"it exists and is not a directory; choose another directory (--out; out= from Python)"
+            )
     results = out / "results.csv"
     if (results.exists() or results.is_symlink()) and not _is_sweeps(results):
         raise SweepError(
@@ -330,7 +338,10 @@ def _take_directory(out: Path) -> Path:
             f"beside its cases directory), and a sweep would replace it: choose another directory "
             f"(--out; out= from Python), or move it away"
         )
-    (out / "cases").mkdir(parents=True, exist_ok=True)
+    try:
+        cases.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise SweepError(f"cannot make {cases}: {e.strerror or e}") from None
     return results
 
 
