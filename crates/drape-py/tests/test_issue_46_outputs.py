@@ -139,3 +139,21 @@ def test_a_sweep_into_a_file_is_one_line_and_exit_2(tmp_path):
     assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr, done.stderr
     assert str(out / "cases") in done.stderr and "not a directory" in done.stderr
     assert sorted(p.name for p in out.iterdir()) == ["cases"]
+
+
+def test_a_refused_run_writes_nothing(tmp_path, monkeypatch):
+    # out="" names no directory: refused naming the empty value, and no
+    # drape.lock in the working directory.
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(drape.OutputError, match=r'"" is an empty path'):
+        drape.run(short_pedestal(), out="")
+    with pytest.raises(drape.OutputError, match=r'"" is an empty path'):
+        drape.run(short_pedestal(), out="", resume=True)
+    assert list(tmp_path.iterdir()) == []
+    # A directory with a file of the user's: refused by name, left as it was.
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+    with pytest.raises(drape.OutputError, match="notes.txt"):
+        drape.run(short_pedestal(), out=out)
+    assert [p.name for p in out.iterdir()] == ["notes.txt"]

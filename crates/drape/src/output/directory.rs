@@ -79,6 +79,12 @@ pub enum DirectoryError {
         /// What it is instead.
         what: NotARun,
     },
+    /// The path is empty: it names no directory (and would put the lock
+    /// into the working directory).
+    #[error(
+        "the output directory \"\" is an empty path: name a directory (--out; out= from Python)"
+    )]
+    Empty,
     /// It is not a directory, or cannot be created, read or locked.
     #[error("cannot use {path} as the output directory: {error}")]
     Io {
@@ -132,6 +138,9 @@ pub struct OutputLock {
 /// Creates `dir` if needed and takes its lock; refuses at once if another
 /// process holds it.
 pub fn lock(dir: &Path) -> Result<OutputLock, DirectoryError> {
+    if dir.as_os_str().is_empty() {
+        return Err(DirectoryError::Empty);
+    }
     if dir.exists() && !dir.is_dir() {
         return Err(DirectoryError::Io {
             path: dir.to_path_buf(),
@@ -184,6 +193,9 @@ pub const RUN_FILES: [&str; 3] = ["checkpoint.bin", "summary.json", SCENARIO_PAT
 /// anything, so that a refusal can be recorded in the summary without
 /// racing another writer.
 pub fn lock_resume(dir: &Path) -> Result<OutputLock, DirectoryError> {
+    if dir.as_os_str().is_empty() {
+        return Err(DirectoryError::Empty);
+    }
     let not_a_run = |what| {
         Err(DirectoryError::NotARun {
             dir: dir.to_path_buf(),
@@ -219,11 +231,25 @@ fn is_temporary(name: &str) -> bool {
 /// `scenario`, the file being run, may lie there too — and removes the
 /// previous run's outputs: summary, checkpoint, history, collection and
 /// frames (not the scenario copy, which the caller rewrites).
+///
+/// A refused directory that had no lock file before `lock` made one is
+/// left as it was found: the lock file goes again (the directory is not
+/// drape's, and the next run into it must not take it for drape's).
 pub fn clear_previous_outputs(
     lock: &OutputLock,
     dir: &Path,
     scenario: Option<&Path>,
 ) -> Result<(), DirectoryError> {
+    let cleared = clear(lock, dir, scenario);
+    if cleared.is_err() && !lock.was_drapes {
+        // Nothing else was touched: without an earlier lock file every
+        // file of drape's name counts as foreign, so nothing was removed.
+        let _ = std::fs::remove_file(dir.join(LOCK_FILE));
+    }
+    cleared
+}
+
+fn clear(lock: &OutputLock, dir: &Path, scenario: Option<&Path>) -> Result<(), DirectoryError> {
     let scenario = scenario.and_then(|p| std::fs::canonicalize(p).ok());
     let had_lock = lock.was_drapes;
     let mut foreign = Vec::new();
@@ -396,6 +422,8 @@ mod tests {
             Err(DirectoryError::Foreign { entries, .. }) => assert_eq!(entries, ["scenario.toml"]),
             other => panic!("{other:?}"),
         }
+        // Refused, the directory is left as it was found: no lock file.
+        assert!(!user.join(LOCK_FILE).exists());
         // The scenario being run may lie in the directory.
         std::fs::remove_file(user.join("scenario.toml")).unwrap();
         clear_previous_outputs(&held, &user, Some(&user.join("variant.toml")))
