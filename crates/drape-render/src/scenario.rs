@@ -150,28 +150,29 @@ pub fn parse_obstacles(path: &Path, text: &str) -> Result<(Vec<Obstacle>, Vec<St
     let mut out = Vec::new();
     let mut notices = Vec::new();
     for (i, r) in file.obstacle.into_iter().enumerate() {
-        let n = i + 1;
+        // Numbered from 0, as `drape check` and `drape measure` name them.
+        let n = format!("obstacle[{i}]");
         let need_v = |v: Option<V3>, key: &str| -> Result<V3> {
-            let v = v.ok_or_else(|| err(format!("obstacle {n}: missing {key}")))?;
+            let v = v.ok_or_else(|| err(format!("{n}: missing {key}")))?;
             if v.iter().all(|x| x.is_finite()) {
                 Ok(v)
             } else {
-                Err(err(format!("obstacle {n}: {key} is not finite")))
+                Err(err(format!("{n}: {key} is not finite")))
             }
         };
         let need_pos = |v: Option<f64>, key: &str| -> Result<f64> {
-            let v = v.ok_or_else(|| err(format!("obstacle {n}: missing {key}")))?;
+            let v = v.ok_or_else(|| err(format!("{n}: missing {key}")))?;
             if v.is_finite() && v > 0.0 {
                 Ok(v)
             } else {
-                Err(err(format!("obstacle {n}: {key} must be > 0")))
+                Err(err(format!("{n}: {key} must be > 0")))
             }
         };
         let shape = match r.shape.as_deref() {
             Some("plane") => {
                 let normal = need_v(r.normal, "normal")?;
                 if normal.iter().all(|&x| x == 0.0) {
-                    return Err(err(format!("obstacle {n}: normal is zero")));
+                    return Err(err(format!("{n}: normal is zero")));
                 }
                 Shape::Plane {
                     point: need_v(r.point, "point")?,
@@ -182,7 +183,7 @@ pub fn parse_obstacles(path: &Path, text: &str) -> Result<(Vec<Obstacle>, Vec<St
                 let min = need_v(r.min, "min")?;
                 let max = need_v(r.max, "max")?;
                 if (0..3).any(|k| min[k] >= max[k]) {
-                    return Err(err(format!("obstacle {n}: min must be < max")));
+                    return Err(err(format!("{n}: min must be < max")));
                 }
                 Shape::Box { min, max }
             }
@@ -193,7 +194,7 @@ pub fn parse_obstacles(path: &Path, text: &str) -> Result<(Vec<Obstacle>, Vec<St
             Some("cylinder") => {
                 let axis = need_v(r.axis, "axis")?;
                 if axis.iter().all(|&x| x == 0.0) {
-                    return Err(err(format!("obstacle {n}: axis is zero")));
+                    return Err(err(format!("{n}: axis is zero")));
                 }
                 Shape::Cylinder {
                     center: need_v(r.center, "center")?,
@@ -204,13 +205,13 @@ pub fn parse_obstacles(path: &Path, text: &str) -> Result<(Vec<Obstacle>, Vec<St
             }
             Some("mesh") => {
                 notices.push(format!(
-                    "obstacle {n} (mesh {}) is not drawn: mesh obstacles are not rendered",
+                    "{n} (mesh {}) is not drawn: mesh obstacles are not rendered",
                     r.path.as_deref().unwrap_or("?")
                 ));
                 continue;
             }
-            Some(other) => return Err(err(format!("obstacle {n}: unknown shape {other:?}"))),
-            None => return Err(err(format!("obstacle {n}: missing shape"))),
+            Some(other) => return Err(err(format!("{n}: unknown shape {other:?}"))),
+            None => return Err(err(format!("{n}: missing shape"))),
         };
         let velocity = match r.velocity {
             Some(v) => need_v(Some(v), "velocity")?,

@@ -607,15 +607,9 @@ fn quadratic_and_cubic_triangles_are_drawn_whole() {
     }
 }
 
-#[test]
-fn obstacles_from_the_scenario_are_drawn_grey_behind_the_fabric() {
-    let dir = test_dir("obstacles");
-    write_run(&dir, &[two_heights(0, 0.0)]);
-    // A box under sheet A reaching out to x = 0.1 (between the sheets),
-    // and a mesh obstacle that is skipped with a notice.
-    fs::write(
-        dir.join("scenario.toml"),
-        r#"
+/// A box under sheet A of [`two_heights`] reaching out to x = 0.1 (between
+/// the sheets), and a mesh obstacle, which is not drawn.
+const BOX_AND_MESH: &str = r#"
 title = "x"
 [[obstacle]]
 shape = "box"
@@ -624,9 +618,13 @@ max = [0.1, 0.2, -0.05]
 [[obstacle]]
 shape = "mesh"
 path = "thing.obj"
-"#,
-    )
-    .unwrap();
+"#;
+
+#[test]
+fn obstacles_from_the_scenario_are_drawn_grey_behind_the_fabric() {
+    let dir = test_dir("obstacles");
+    write_run(&dir, &[two_heights(0, 0.0)]);
+    fs::write(dir.join("scenario.toml"), BOX_AND_MESH).unwrap();
     let (img, r) = render_image(&dir, &top_opts(&dir, "o.png")).unwrap();
     assert_eq!(r.obstacles, 1);
     assert_eq!(r.notices.len(), 1, "{:?}", r.notices);
@@ -1070,4 +1068,27 @@ fn every_field_renders() {
         }
     }
     fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 46: obstacles are numbered from 0, `obstacle[i]`, as `drape check`
+/// and `drape measure` number them (the renderer said "obstacle 2" for
+/// `obstacle[1]`).
+#[test]
+fn obstacles_are_named_as_check_and_measure_name_them() {
+    let text = BOX_AND_MESH;
+    let (shapes, notices) = drape_render::parse_obstacles(Path::new("s.toml"), text).unwrap();
+    assert_eq!(shapes.len(), 1);
+    assert_eq!(notices.len(), 1);
+    assert!(
+        notices[0].starts_with("obstacle[1] (mesh thing.obj)"),
+        "{notices:?}"
+    );
+    let bad = format!(
+        "{text}[[obstacle]]\nshape = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = -1.0\n"
+    );
+    let e = drape_render::parse_obstacles(Path::new("s.toml"), &bad).unwrap_err();
+    assert!(
+        e.to_string().contains("obstacle[2]: radius must be > 0"),
+        "{e}"
+    );
 }
