@@ -10,7 +10,7 @@ use drape::output::directory::{self, DirectoryError};
 use drape::scenario::{Scenario, ScenarioError};
 use drape::setup::Setup;
 use drape::simulation::{self, Front, RunError, Session, StepInfo};
-use drape_render::{Field, View};
+use drape_render::{Field, FrameSelect, View};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -105,17 +105,17 @@ enum Command {
     Measure {
         /// The output directory of a run (or its fields.pvd).
         dir: PathBuf,
-        /// The frame of this step [default: the last].
-        #[arg(long, conflicts_with = "time")]
-        step: Option<u64>,
+        /// The frame of this step; -1 is the last [default: the last].
+        #[arg(long, conflicts_with = "time", allow_negative_numbers = true, value_name = "STEP", value_parser = parse_step)]
+        step: Option<FrameSelect>,
         /// The frame nearest this time (s).
         #[arg(long, allow_negative_numbers = true)]
         time: Option<f64>,
         /// The pedestal's radius r_p (m), instead of the scenario's cylinder.
-        #[arg(long, value_name = "R")]
+        #[arg(long, value_name = "R", allow_negative_numbers = true)]
         pedestal_radius: Option<f64>,
         /// The specimen's radius R (m), instead of the scenario's disc.
-        #[arg(long, value_name = "R")]
+        #[arg(long, value_name = "R", allow_negative_numbers = true)]
         specimen_radius: Option<f64>,
     },
     /// List the bundled example scenarios, or print or write one.
@@ -184,11 +184,7 @@ fn main() -> ExitCode {
             specimen_radius,
         } => measure::run(&measure::MeasureArgs {
             dir,
-            frame: match (step, time) {
-                (Some(s), _) => drape_render::FrameSelect::Step(s),
-                (_, Some(t)) => drape_render::FrameSelect::Time(t),
-                _ => drape_render::FrameSelect::Last,
-            },
+            frame: frame(step, time),
             given: drape::measure::Given {
                 pedestal_radius,
                 specimen_radius,
@@ -552,9 +548,9 @@ fn record_refusal(session: &Session, failure: Failure) -> Failure {
 struct RenderArgs {
     /// The output directory of a run (or its fields.pvd).
     dir: PathBuf,
-    /// The frame of this step [default: the last].
-    #[arg(long, conflicts_with = "time")]
-    step: Option<u64>,
+    /// The frame of this step; -1 is the last [default: the last].
+    #[arg(long, conflicts_with = "time", allow_negative_numbers = true, value_name = "STEP", value_parser = parse_step)]
+    step: Option<FrameSelect>,
     /// The frame nearest this time (s).
     #[arg(long, allow_negative_numbers = true)]
     time: Option<f64>,
@@ -568,13 +564,13 @@ struct RenderArgs {
     #[arg(long, conflicts_with_all = ["animate", "step", "time"])]
     grid: bool,
     /// Panels of --grid.
-    #[arg(long, default_value_t = 6)]
+    #[arg(long, default_value_t = 6, allow_negative_numbers = true)]
     panels: usize,
     /// Every written frame into a GIF.
     #[arg(long)]
     animate: bool,
     /// Delay between animation frames (ms).
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, allow_negative_numbers = true)]
     delay_ms: u32,
     /// Output file [default: DIR/render.png, DIR/render-grid.png or DIR/animation.gif].
     #[arg(short = 'o', long)]
@@ -595,6 +591,29 @@ struct RenderArgs {
     range: Option<Vec<f64>>,
 }
 
+/// `--step N` of render and measure: the frame of step N, or with -1 the
+/// last frame written (as `positions(step=-1)` in Python); the frame's
+/// existence is checked against the run's frames.
+fn parse_step(text: &str) -> Result<FrameSelect, String> {
+    match text.trim().parse::<i64>() {
+        Ok(-1) => Ok(FrameSelect::Last),
+        Ok(step) => u64::try_from(step).map(FrameSelect::Step).map_err(|_| {
+            format!("{step} is not a step: a step number (>= 0), or -1 for the last frame written")
+        }),
+        Err(_) => Err("expected a step number (>= 0), or -1 for the last frame written".into()),
+    }
+}
+
+/// The frame `--step` or `--time` picks (clap lets one of them through),
+/// else the last.
+fn frame(step: Option<FrameSelect>, time: Option<f64>) -> FrameSelect {
+    match (step, time) {
+        (Some(step), _) => step,
+        (_, Some(t)) => FrameSelect::Time(t),
+        _ => FrameSelect::Last,
+    }
+}
+
 /// `--size WxH` in pixels; the renderer checks the range (render and plot
 /// have their own) and the memory it needs.
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
@@ -604,7 +623,7 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
 }
 
 fn render(a: RenderArgs) -> Result<(), Failure> {
-    use drape_render::{FrameSelect, Layout, RenderOptions};
+    use drape_render::{Layout, RenderOptions};
     let input = |e: drape_render::RenderError| Failure::Input(anyhow::Error::new(e));
     let (width, height) = (a.size).unwrap_or(if a.animate { (800, 600) } else { (1200, 900) });
     let mut opts = RenderOptions {
@@ -617,11 +636,7 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
         } else {
             Layout::Single
         },
-        frame: match (a.step, a.time) {
-            (Some(s), _) => FrameSelect::Step(s),
-            (_, Some(t)) => FrameSelect::Time(t),
-            _ => FrameSelect::Last,
-        },
+        frame: frame(a.step, a.time),
         view: a.view,
         field: a.field,
         width,

@@ -66,3 +66,86 @@ fn an_empty_output_directory_is_refused_naming_it() {
     assert!(!dir.join("drape.lock").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `drape ARGS` with the output directory `out` where the arguments say
+/// `DIR`; its exit code and standard error.
+fn drape_on(out: &std::path::Path, args: &[&str]) -> (Option<i32>, String) {
+    let args: Vec<&std::ffi::OsStr> = args
+        .iter()
+        .map(|a| {
+            if *a == "DIR" {
+                out.as_os_str()
+            } else {
+                a.as_ref()
+            }
+        })
+        .collect();
+    let o = issue_19_support::drape(&args);
+    (o.status.code(), text(&o.stderr))
+}
+
+/// Negative numbers reach the commands' own checks (clap took `-0.01` for
+/// an option and said "unexpected argument '-0'"); `--step -1` is the last
+/// frame, as `positions(step=-1)` in Python.
+#[test]
+fn negative_numbers_reach_the_commands_checks() {
+    let dir = scratch("i46-negative");
+    let scenario = falling_plate(&dir, 4, "[output]\nevery = 2\n");
+    let out = dir.join("out");
+    assert!(run(&scenario, &out).status.success());
+    for (args, said) in [
+        (
+            &[
+                "measure",
+                "DIR",
+                "--pedestal-radius",
+                "-0.01",
+                "--specimen-radius",
+                "0.05",
+            ][..],
+            "pedestal radius",
+        ),
+        (
+            &[
+                "measure",
+                "DIR",
+                "--pedestal-radius",
+                "0.01",
+                "--specimen-radius",
+                "-1",
+            ][..],
+            "specimen radius",
+        ),
+        (&["measure", "DIR", "--step", "-2"][..], "-2 is not a step"),
+        (&["render", "DIR", "--step", "-2"][..], "-2 is not a step"),
+        (
+            &["render", "DIR", "--panels", "-1", "--grid"][..],
+            "invalid digit",
+        ),
+    ] {
+        let (code, e) = drape_on(&out, args);
+        assert_eq!(code, Some(2), "{args:?}: {e}");
+        assert!(!e.contains("unexpected argument"), "{args:?}: {e}");
+        assert!(e.contains(said), "{args:?}: {e}");
+    }
+    // -1: the last frame, the one written without --step.
+    let png = dir.join("last.png");
+    let (code, e) = drape_on(
+        &out,
+        &["render", "DIR", "--step", "-1", "-o", png.to_str().unwrap()],
+    );
+    assert_eq!(code, Some(0), "{e}");
+    let default = dir.join("default.png");
+    let (code, e) = drape_on(&out, &["render", "DIR", "-o", default.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{e}");
+    assert_eq!(
+        std::fs::read(&png).unwrap(),
+        std::fs::read(&default).unwrap()
+    );
+    let (code, e) = drape_on(
+        &out,
+        &["render", "DIR", "--step", "4", "-o", png.to_str().unwrap()],
+    );
+    assert_eq!(code, Some(0), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
