@@ -149,3 +149,23 @@ fn negative_numbers_reach_the_commands_checks() {
     assert_eq!(code, Some(0), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// measure, render and plot of a path that does not exist say so (they
+/// said "not a directory"); of a file, that it is not a directory.
+#[test]
+fn a_missing_output_directory_is_called_missing() {
+    let dir = scratch("i46-missing");
+    let missing = dir.join("nowhere");
+    let file = dir.join("a-file");
+    std::fs::write(&file, "mine").unwrap();
+    for command in ["measure", "render", "plot"] {
+        let (code, e) = drape_on(&missing, &[command, "DIR"]);
+        assert_eq!(code, Some(2), "{command}: {e}");
+        assert!(e.contains("does not exist"), "{command}: {e}");
+        assert!(!e.contains("not a directory"), "{command}: {e}");
+        let (code, e) = drape_on(&file, &[command, "DIR"]);
+        assert_eq!(code, Some(2), "{command}: {e}");
+        assert!(e.contains("not a directory"), "{command}: {e}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -274,7 +274,7 @@ fn a_directory_without_outputs_is_refused() {
     let missing = dir.join("nowhere");
     let e = refused(&[missing.to_str().unwrap()]);
     assert!(
-        e.contains("nowhere") && e.contains("not a directory"),
+        e.contains("nowhere") && e.contains("does not exist"),
         "{e}"
     );
     // A collection that lists no frame.

@@ -17,6 +17,23 @@ pub struct FrameEntry {
     pub path: PathBuf,
 }
 
+/// Checks that `path` is a directory: one that does not exist, or a file,
+/// is an [`RenderError::Io`] saying which, as a drape output directory was
+/// expected.
+pub(crate) fn require_dir(path: &Path) -> Result<()> {
+    use std::io::ErrorKind;
+    let (kind, what) = match std::fs::metadata(path) {
+        Ok(m) if m.is_dir() => return Ok(()),
+        Ok(_) => (ErrorKind::NotADirectory, "not a directory"),
+        Err(e) if e.kind() == ErrorKind::NotFound => (ErrorKind::NotFound, "does not exist"),
+        Err(e) => return Err(RenderError::io(path, e)),
+    };
+    Err(RenderError::io(
+        path,
+        std::io::Error::new(kind, format!("{what} (expected a drape output directory)")),
+    ))
+}
+
 /// Which frame to render.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum FrameSelect {
@@ -54,15 +71,7 @@ impl OutputDir {
                 path.to_owned(),
             )
         } else {
-            if !path.is_dir() {
-                return Err(RenderError::io(
-                    path,
-                    std::io::Error::new(
-                        std::io::ErrorKind::NotFound,
-                        "not a directory (expected a drape output directory)",
-                    ),
-                ));
-            }
+            require_dir(path)?;
             (path.to_owned(), path.join("fields.pvd"))
         };
         let text = std::fs::read_to_string(&pvd).map_err(|e| RenderError::io(&pvd, e))?;

@@ -231,15 +231,7 @@ fn output_dir(dir: &Path) -> Result<&Path> {
     } else {
         dir
     };
-    if !dir.is_dir() {
-        return Err(RenderError::io(
-            dir,
-            std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                "not a directory (expected a drape output directory)",
-            ),
-        ));
-    }
+    crate::outdir::require_dir(dir)?;
     Ok(dir)
 }
 
