@@ -172,7 +172,8 @@ def _run_locked(task: Dict[str, Any], case_dir: Path, outcome: Any) -> Dict[str,
         except ScenarioError as e:
             return outcome("failed", str(e), None)
         except RunError as e:
-            return outcome("failed", str(e), dict(e.result.summary) if e.result is not None else None)
+            summary = e.result.summary if e.result is not None else None
+            return outcome("failed", str(e), dict(summary) if summary is not None else None)
         except DrapeError as e:
             return outcome("failed", str(e), None)
         except KeyboardInterrupt as e:
