@@ -284,8 +284,9 @@ fn a_mesh_beyond_the_memory_limit_is_refused_with_the_estimate() {
 
 /// A mesh within the per-node estimate whose Hessian pattern is not: a
 /// 300 x 300 rectangle (90,601 nodes, about 145 MB at 1.6 kB a node) with
-/// bending, whose stencils reach the nodes opposite each triangle's edges
-/// (1,709,399 blocks of 3x3, about 643 MB at 376 bytes a block), is refused
+/// bending, whose stencils reach two triangles beyond each triangle's
+/// edges (3,318,607 blocks of 3x3, about 1,248 MB at 376 bytes a block;
+/// 1,709,399 before issue 42's twelve-node patches), is refused
 /// under `prlimit --as` 600 MB naming the pattern's estimate and what is
 /// left under the limit (it aborted on a failed allocation, exit 134); the
 /// same mesh without bending (630,003 blocks, about 237 MB) is checked.
@@ -326,7 +327,7 @@ fn a_pattern_beyond_the_memory_limit_is_refused_with_its_estimate() {
     for f in [
         "bending.toml, line 5: `mesh.divisions`",
         "sparse pattern of these 90601 nodes (order 1, with bending's stencils)",
-        "1709399 blocks of 3x3 and needs about 643 MB",
+        "3318607 blocks of 3x3 and needs about 1248 MB",
         "MB left under the address-space limit of the process",
     ] {
         assert!(e.contains(f), "expected {f:?} in {e}");

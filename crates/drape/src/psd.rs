@@ -30,8 +30,9 @@ use faer::linalg::cholesky::llt::factor::{
 use faer::linalg::evd::{self, ComputeEigenvectors};
 use faer::{ColMut, MatMut, MatRef, Par};
 
-/// Largest matrix a [`Projector`] takes: a T10 element (10 nodes).
-pub const MAX_DIM: usize = 30;
+/// Largest matrix a [`Projector`] takes: a bending patch's (18 nodes; a
+/// T10 element has 10).
+pub const MAX_DIM: usize = 3 * crate::bending::kernel::MAX_NODES;
 
 /// Relative shift of the semi-definiteness test: eigenvalues above
 /// `-DELTA max |K_ii|` count as non-negative (round-off of a Hessian

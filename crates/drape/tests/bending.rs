@@ -165,6 +165,12 @@ fn strip(
     h: f64,
 ) -> (Mesh, Vec<bool>, Vec<bool>, Vec<usize>) {
     let mesh = rectangle([l, 0.02], divisions, pattern, [0.5 * l, 0.0, 0.0], order);
+    strip_parts(mesh, l, h)
+}
+
+/// A strip mesh along x from the origin to `l` with its held nodes (within
+/// `1.5 h` of the start), their fixed components and its tip's nodes.
+fn strip_parts(mesh: Mesh, l: f64, h: f64) -> (Mesh, Vec<bool>, Vec<bool>, Vec<usize>) {
     let count = mesh.node_count();
     let held: Vec<bool> = mesh.nodes.iter().map(|x| x[0] < 1.5 * h).collect();
     let fixed = hold(count, (0..count).filter(|&a| held[a]));
@@ -208,103 +214,161 @@ fn supported_plate(mesh: Mesh) -> (f64, usize) {
 /// The plate's `E` (Pa), `t` (m), density (kg/m³) and gravity (m/s²).
 const PLATE: (f64, f64, f64, f64) = (1.0e9, 1.0e-3, 1000.0, 0.0981);
 
-/// Kirchhoff's centre deflection of [`supported_plate`]: `0.004062 q
-/// a^4 / D` (Navier's series for nu = 0.3).
+/// Kirchhoff's centre deflection of [`supported_plate`] by Navier's
+/// series (Timoshenko & Woinowsky-Krieger 1959, §30), summed to 1e-12:
+/// `w = 16 q a^4 / (pi^6 D) sum_(m, n odd) (-1)^((m + n)/2 - 1) / (m n (m^2
+/// + n^2)^2)` = `0.00406235 q a^4 / D`, whatever `nu`.
 fn supported_plate_exact() -> f64 {
     let (young, t, rho, g) = PLATE;
     let d = young * t.powi(3) / (12.0 * (1.0 - 0.09));
-    0.004062 * rho * t * g * 0.2f64.powi(4) / d
+    let mut sum = 0.0;
+    for m in (1..400).step_by(2) {
+        for n in (1..400).step_by(2) {
+            let sign = if ((m + n) / 2 - 1) % 2 == 0 {
+                1.0
+            } else {
+                -1.0
+            };
+            let (m, n) = (m as f64, n as f64);
+            sum += sign / (m * n * (m * m + n * n).powi(2));
+        }
+    }
+    16.0 * rho * t * g * 0.2f64.powi(4) * sum / (std::f64::consts::PI.powi(6) * d)
+}
+
+/// The square's diagonals of each mesh pattern of the plate studies:
+/// `right`, `left`, the union jack (diagonals towards the centre) and
+/// criss-cross (alternating square by square, Gmsh's transfinite
+/// `Alternate`: nodes of four and eight triangles).
+fn plate_pattern(name: &str, n: usize) -> Mesh {
+    let rule = |i: usize, j: usize| match name {
+        "right" => true,
+        "left" => false,
+        "union jack" => (i < n / 2) == (j < n / 2),
+        _ => (i + j).is_multiple_of(2),
+    };
+    grid([0.2, 0.2], [n, n], [0.0; 3], rule)
 }
 
 /// The simply supported square plate under a uniform load (Timoshenko &
 /// Woinowsky-Krieger, "Theory of plates and shells", 1959, table 8):
-/// centre deflection `w = 0.00406 q a^4 / D` for nu = 0.3 (Navier's series
-/// gives 0.004062). Boundary nodes held (w = 0, free rotation); the load
-/// small (w/t ~ 1e-2), so that the membrane's stretching is negligible.
+/// centre deflection `w = 0.00406 q a^4 / D`. Boundary nodes held (w = 0,
+/// free rotation); the load small (w/t ~ 1e-2), so that the membrane's
+/// stretching is negligible (1e-4 of w). On every pattern of diagonals —
+/// the criss-cross one included, where the curvature fitted per triangle
+/// was +74 % too soft at every refinement — and in T3 and T6 (the same
+/// nodes' sub-triangles): within 1 % at 24 x 24 squares and converging at
+/// an observed order of at least 1.5 from 8 x 8 to 32 x 32; and on Gmsh's
+/// unstructured and criss-cross meshes within 1 % (docs/validation.md,
+/// "Bending on every mesh").
 #[test]
-fn simply_supported_plate_matches_kirchhoff() {
-    let a = 0.2;
+fn simply_supported_plate_converges_on_every_pattern() {
     let exact = supported_plate_exact();
-    let mut report = String::new();
-    let mut results = Vec::new();
-    for (label, meshes) in [
-        (
-            "structured (right diagonals)",
-            [8, 16, 32].map(|n| {
-                rectangle(
-                    [a, a],
-                    [n, n],
-                    Pattern::Right,
-                    [0.0; 3],
-                    ElementOrder::Linear,
-                )
-            }),
-        ),
-        (
-            "structured (union jack)",
-            [8, 16, 32].map(|n| {
-                rectangle(
-                    [a, a],
-                    [n, n],
-                    Pattern::Alternate,
-                    [0.0; 3],
-                    ElementOrder::Linear,
-                )
-            }),
-        ),
-        (
-            "unstructured Gmsh",
-            [8, 16, 32].map(|n| gmsh(&format!("plate-unstructured-{n}.msh"))),
-        ),
-    ] {
-        let mut hs = Vec::new();
-        let mut es = Vec::new();
-        for mesh in meshes {
-            let h = a / (mesh.element_count() as f64 / 2.0).sqrt();
-            let elements = mesh.element_count();
-            let (w, its) = supported_plate(mesh);
-            let e = (w - exact) / exact;
+    let mut report = format!("exact w = {exact:.6e} m\n");
+    let mut failures = Vec::new();
+    let sizes = [8, 16, 24, 32];
+    for order in [ElementOrder::Linear, ElementOrder::Quadratic] {
+        for name in ["right", "left", "union jack", "criss-cross"] {
+            let mut errors = Vec::new();
+            for n in sizes {
+                let mesh = drape::mesh::generate::elevate(&plate_pattern(name, n), order);
+                let (w, _) = supported_plate(mesh);
+                errors.push((w - exact) / exact);
+            }
+            let hs: Vec<f64> = sizes.iter().map(|&n| 1.0 / n as f64).collect();
+            let p = rate(&hs, &errors.iter().map(|e| e.abs()).collect::<Vec<_>>());
             report += &format!(
-                "{label}: {elements} T3, w = {w:.5e} m ({:+.2} %), {its} Newton iterations\n",
-                100.0 * e
+                "{order:?} {name}: {} (order {p:.2})\n",
+                errors
+                    .iter()
+                    .map(|e| format!("{:+.3} %", 100.0 * e))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             );
-            hs.push(h);
-            es.push(e);
+            if errors[2].abs() >= 0.01 || p < 1.5 {
+                failures.push(format!("{order:?} {name}"));
+            }
         }
-        let p = rate(&hs, &es.iter().map(|e| e.abs()).collect::<Vec<_>>());
-        report += &format!("{label}: error ~ h^{p:.2}\n");
-        results.push((label, es, p));
     }
-    let t6 = (supported_plate(gmsh("plate-unstructured-16-t6.msh")).0 - exact) / exact;
-    report += &format!("unstructured Gmsh T6, 616 elements: {:+.2} %\n", 100.0 * t6);
-    eprintln!("exact w = {exact:.5e} m\n{report}");
-    for (label, es, p) in &results {
-        assert!(
-            es[0].abs() > es[1].abs() && es[1].abs() > es[2].abs(),
-            "{label}: not converging\n{report}"
-        );
-        assert!(*p > 1.5, "{label}: rate {p}\n{report}");
-        assert!(es[2].abs() < 0.03, "{label}\n{report}");
+    // Gmsh's meshes: unstructured (Frontal-Delaunay) at 8, 16 and 32
+    // divisions of a side, as T3 and T6, and its criss-cross.
+    for name in [
+        "plate-unstructured-8.msh",
+        "plate-unstructured-16.msh",
+        "plate-unstructured-32.msh",
+        "plate-unstructured-16-t6.msh",
+        "plate-criss-cross-16.msh",
+    ] {
+        let mesh = gmsh(name);
+        let elements = mesh.element_count();
+        let e = (supported_plate(mesh).0 - exact) / exact;
+        report += &format!("{name} ({elements} elements): {:+.3} %\n", 100.0 * e);
+        if e.abs() >= 0.01 {
+            failures.push(name.to_string());
+        }
     }
-    // Structured and unstructured meshes of about 500 triangles.
-    assert!(results[0].1[1].abs() < 0.03, "{report}");
-    assert!(results[2].1[1].abs() < 0.05, "{report}");
-    assert!(t6.abs() < 0.05, "{report}");
+    eprintln!("{report}");
+    assert!(failures.is_empty(), "{failures:?}\n{report}");
 }
 
-/// The criss-cross plate that Gmsh's transfinite `Alternate` makes
-/// (`scripts/meshes/bending_meshes.py`: 16 x 16 squares, diagonals
-/// alternating): `four_triangle_nodes` finds half its interior nodes
-/// corners of four triangles (the warning's test), and the simply
-/// supported plate on it is as much too flexible as the warning says,
-/// +72 % (docs/validation.md, "Where the union jack's error is").
+/// The plate on a right mesh of 24 x 24 squares whose lower-left quadrant
+/// is refined — each triangle there split in four, each triangle beside
+/// it with a split edge halved (a conforming closure, whose nodes along
+/// the quadrant's border have from four to nine triangles) — deflects as the uniformly refined mesh
+/// does: centre within 1 % of Kirchhoff, and at every node of the coarse
+/// mesh within 1 % of the largest deflection of the uniform 48 x 48
+/// mesh's, so no soft spot along the closure.
 #[test]
-fn a_criss_cross_gmsh_plate_is_found_and_bends_too_easily() {
-    let mesh = gmsh("plate-criss-cross-16.msh");
-    assert_eq!(drape::bending::four_triangle_nodes(&mesh), (113, 225));
+fn a_plate_refined_in_one_quadrant_has_no_soft_spot() {
     let exact = supported_plate_exact();
-    let error = (supported_plate(mesh).0 - exact) / exact;
-    assert!((0.70..0.75).contains(&error), "{:+.2} %", 100.0 * error);
+    let coarse = plate_pattern("right", 24);
+    let refined = support::refine::split(&coarse, |x| x[0] < 0.0 && x[1] < 0.0);
+    assert!(refined.element_count() > 4 * 24 * 24 / 2, "refined");
+    let deflection = |mesh: Mesh| {
+        let (young, t, rho, g) = PLATE;
+        let rigidity = BendingRigidity::Plate {
+            rigidity: young * t.powi(3) / (12.0 * (1.0 - 0.09)),
+            poisson_ratio: 0.3,
+        };
+        let count = mesh.node_count();
+        let boundary = mesh.boundary_nodes();
+        let nodes = mesh.nodes.clone();
+        let m = model(mesh, young, t, rho, g, hold(count, boundary), rigidity);
+        let (y, _) = equilibrium(&m, 1);
+        (nodes, y)
+    };
+    let (rn, ry) = deflection(refined);
+    let (fnodes, fy) = deflection(plate_pattern("right", 48));
+    let at = |nodes: &[[f64; 3]], y: &[f64], p: [f64; 3]| {
+        let k = nodes
+            .iter()
+            .position(|q| (q[0] - p[0]).abs() < 1e-9 && (q[1] - p[1]).abs() < 1e-9)
+            .expect("a node there");
+        -y[3 * k + 2]
+    };
+    let centre = at(&rn, &ry, [0.0; 3]);
+    let e = (centre - exact) / exact;
+    let wmax = fy.chunks(3).map(|p| -p[2]).fold(0.0, f64::max);
+    let mut worst = (0.0, [0.0; 3]);
+    for p in &coarse.nodes {
+        let d = (at(&rn, &ry, *p) - at(&fnodes, &fy, *p)).abs() / wmax;
+        if d > worst.0 {
+            worst = (d, *p);
+        }
+    }
+    eprintln!(
+        "centre {:+.3} %, worst {:.3} % of w_max at {:?}",
+        100.0 * e,
+        100.0 * worst.0,
+        worst.1
+    );
+    assert!(e.abs() < 0.01, "centre {:+.3} %", 100.0 * e);
+    assert!(
+        worst.0 < 0.01,
+        "{:.3} % of w_max at {:?}",
+        100.0 * worst.0,
+        worst.1
+    );
 }
 
 /// Pure bending: a flat strip laid onto a cylinder of radius `R` (an
@@ -358,13 +422,7 @@ fn cantilever(
     rigidity: BendingRigidity,
     increments: usize,
 ) -> (f64, f64) {
-    cantilever_held(
-        l,
-        divisions,
-        rigidity,
-        increments,
-        (false, Pattern::Alternate),
-    )
+    cantilever_held(l, divisions, rigidity, increments, (false, "union jack"))
 }
 
 /// [`cantilever`] on a mesh of `pattern`, the two held columns a clamp
@@ -375,10 +433,26 @@ fn cantilever_held(
     divisions: usize,
     rigidity: BendingRigidity,
     increments: usize,
-    (clamp, pattern): (bool, Pattern),
+    (clamp, pattern): (bool, &str),
 ) -> (f64, f64) {
     let h = l / divisions as f64;
-    let (mesh, held, fixed, tip) = strip(l, [divisions, 4], pattern, ElementOrder::Linear, h);
+    let (mesh, held, fixed, tip) = match pattern {
+        "right" => strip(l, [divisions, 4], Pattern::Right, ElementOrder::Linear, h),
+        "union jack" => strip(
+            l,
+            [divisions, 4],
+            Pattern::Alternate,
+            ElementOrder::Linear,
+            h,
+        ),
+        _ => {
+            // Criss-cross: the strip's squares alternate their diagonals.
+            let mesh = grid([l, 0.02], [divisions, 4], [0.5 * l, 0.0, 0.0], |i, j| {
+                (i + j).is_multiple_of(2)
+            });
+            strip_parts(mesh, l, h)
+        }
+    };
     let clamped = if clamp { held } else { Vec::new() };
     let m = clamped_model(mesh, (2e6, 6e-4, 320.0, 9.81), fixed, clamped, rigidity);
     let (y, its) = equilibrium(&m, increments);
@@ -422,16 +496,14 @@ fn cantilever_large_deflection_matches_the_elastica() {
     assert!((w - reference.tip_deflection).abs() < 2e-3);
 }
 
-/// Issue 31: held by a clamp (`[[fix]] clamp = true` on its first two
-/// columns), a cantilever's free length starts at the last held column, as
-/// the lab measures it: at 40 x 4 T3 (`right` diagonals) along 20 cm,
-/// small deflection within 1 % of `q L^4 / (8 B)` (+0.58 % isotropic,
-/// +0.73 % and +0.46 % woven along its warp and its weft), large
-/// deflection within 1 mm of the elastica (+0.58 mm). On `alternate`
-/// diagonals (union jack) the same strips are +0.83 %, +1.21 % and
-/// +0.5 % (the pattern's larger error constant, issue 31's item 4).
-/// Without the clamp the strip measured from that column is too soft (the
-/// held triangle beyond it leaves the slope free there): 5 % too deep.
+/// Issues 31 and 42: held by a clamp (`[[fix]] clamp = true` on its first
+/// two columns), a cantilever's free length starts at the last held
+/// column, as the lab measures it: at 40 x 4 T3 along 20 cm, on right,
+/// union jack and criss-cross diagonals, small deflection within 1 % of
+/// `q L^4 / (8 B)`, isotropic and woven along its warp and its weft, and
+/// large deflection within 1 mm of the heavy elastica. Without the clamp
+/// the strip measured from that column is too soft (the held triangle
+/// beyond it leaves the slope free there): 3 % too deep at least.
 #[test]
 fn a_clamped_cantilever_starts_at_the_last_held_column() {
     let l: f64 = 0.2;
@@ -441,41 +513,49 @@ fn a_clamped_cantilever_starts_at_the_last_held_column() {
         weft: 0.4 * b,
         direction,
     };
-    for (name, rigidity, along) in [
-        ("isotropic", BendingRigidity::Isotropic(b), b),
-        ("woven, warp along", woven([1.0, 0.0, 0.0]), b),
-        ("woven, weft along", woven([0.0, 1.0, 0.0]), 0.4 * b),
-    ] {
-        let (w, free) = cantilever_held(l, 40, rigidity, 1, (true, Pattern::Right));
-        let exact = Q * free.powi(4) / (8.0 * along);
-        let e = (w - exact) / exact;
-        eprintln!(
-            "clamped, {name}: {w:.5e} m against {exact:.5e} m ({:+.2} %)",
-            100.0 * e
+    let mut report = String::new();
+    let mut failures = Vec::new();
+    for pattern in ["right", "union jack", "criss-cross"] {
+        for (name, rigidity, along) in [
+            ("isotropic", BendingRigidity::Isotropic(b), b),
+            ("woven, warp along", woven([1.0, 0.0, 0.0]), b),
+            ("woven, weft along", woven([0.0, 1.0, 0.0]), 0.4 * b),
+        ] {
+            let (w, free) = cantilever_held(l, 40, rigidity, 1, (true, pattern));
+            let exact = Q * free.powi(4) / (8.0 * along);
+            let e = (w - exact) / exact;
+            report += &format!("clamped, {pattern}, {name}: {:+.3} %\n", 100.0 * e);
+            if e.abs() >= 0.01 {
+                failures.push(format!("{pattern}, {name}"));
+            }
+        }
+        // Large deflection: the heavy elastica.
+        let stiff = 1.0e-3;
+        let (w, free) = cantilever_held(
+            l,
+            40,
+            BendingRigidity::Isotropic(stiff),
+            10,
+            (true, pattern),
         );
-        assert!(e.abs() < 0.01, "{name}: {w:e} m, exact {exact:e} m");
+        let reference = support::elastica::cantilever(free, Q, stiff);
+        let miss = w - reference.tip_deflection;
+        report += &format!(
+            "clamped elastica, {pattern}: tip {:.5} m, drape {w:.5} m ({:+.2} mm)\n",
+            reference.tip_deflection,
+            1e3 * miss
+        );
+        if miss.abs() >= 1e-3 {
+            failures.push(format!("{pattern}, elastica"));
+        }
     }
+    eprintln!("{report}");
+    assert!(failures.is_empty(), "{failures:?}\n{report}");
     // Without the clamp, from the same column: too soft.
     let (w, free) = cantilever(l, 40, BendingRigidity::Isotropic(b), 1);
     let from_last = Q * (free - 0.5 * l / 40.0).powi(4) / (8.0 * b);
     eprintln!("held only: {w:.5e} m against {from_last:.5e} m from the last held column");
     assert!(w > 1.03 * from_last);
-    // Large deflection: the heavy elastica.
-    let b = 1.0e-3;
-    let (w, free) = cantilever_held(
-        l,
-        40,
-        BendingRigidity::Isotropic(b),
-        10,
-        (true, Pattern::Right),
-    );
-    let reference = support::elastica::cantilever(free, Q, b);
-    eprintln!(
-        "clamped elastica: tip {:.5} m, drape {w:.5} m ({:+.2} mm)",
-        reference.tip_deflection,
-        1e3 * (w - reference.tip_deflection)
-    );
-    assert!((w - reference.tip_deflection).abs() < 1e-3);
 }
 
 /// A woven strip bends by its warp rigidity when laid along the warp and
@@ -605,7 +685,7 @@ fn union_jack_study() {
             },
         ),
         ("criss-cross (alternating diagonals)", &|i, j, _| {
-            (i + j) % 2 == 0
+            (i + j).is_multiple_of(2)
         }),
     ];
     for (label, right) in layouts {

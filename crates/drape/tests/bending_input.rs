@@ -381,7 +381,7 @@ fn a_clamp_gives_the_patches_along_it_a_ghost() {
         let ghosts = bending
             .patches()
             .iter()
-            .filter(|p| p.ghost.is_some())
+            .filter(|p| p.clamped_edges > 0)
             .count();
         (bending.patches().len(), ghosts)
     };

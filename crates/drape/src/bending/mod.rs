@@ -2,13 +2,16 @@
 //!
 //! Each triangle of the mesh (each sub-triangle of a curved T6 or T10
 //! element, [`triangulate`]) carries a constant curvature `kappa` (Voigt:
-//! `kappa_11, kappa_22, 2 kappa_12`, in 1/m) measured on the quadratic
-//! surface through its patch — its own three nodes and the three nodes
-//! opposite its edges ([`patch`], after Oñate & Zárate 2000 and Flores &
-//! Oñate 2005) — along the normal of its plane:
+//! `kappa_11, kappa_22, 2 kappa_12`, in 1/m): the normal component of the
+//! mean second derivative of the position field over the triangle, which
+//! the divergence theorem turns into a sum over its edges of the
+//! derivatives at their midpoints ([`patch`]); each edge's derivatives are
+//! fitted once from the nodes around it — a quadratic through its two
+//! triangles, least squares on the nodes beyond — and shared by the two
+//! triangles ([`edge`]):
 //!
 //! ```text
-//! kappa_ab = n . x_,ab            (the second fundamental form)
+//! kappa_ab = n . 1/A int_T x_,ab dA       (the second fundamental form)
 //! W_bend   = sum_T 1/2 A_T (kappa - kappa_0) . D (kappa - kappa_0)
 //! ```
 //!
@@ -30,14 +33,14 @@
 //! freely (the moment normal to them vanishes): a free edge, or a simply
 //! supported one where its nodes are held. An edge whose nodes a `[[fix]]
 //! clamp = true` holds is clamped: the patch across it takes the mirror
-//! image of the triangle's free vertex for the missing neighbour, which
-//! holds the slope there ([`patch`]; the triangles it holds entirely carry
-//! no patch). Without it, an edge is clamped by holding two rows of
+//! slope across it at the reference surface's ([`patch`]; the triangles
+//! it holds entirely carry no patch). Without it, an edge is clamped by holding two rows of
 //! nodes, and bends as if clamped midway between them.
 //!
 //! The energy, gradient and Hessian of a patch are in [`kernel`], each
 //! checked against finite differences in its tests.
 
+pub mod edge;
 pub mod kernel;
 pub mod patch;
 
@@ -45,6 +48,7 @@ use crate::element::geometry::AxisError;
 use crate::mesh::Mesh;
 use crate::par::Shared;
 use crate::solver::SparsePattern;
+use edge::{EdgeFit, EdgeNodes};
 use patch::{Patch, PatchError};
 
 /// The bending stiffness of the fabric (`[material] bending_rigidity`, docs/theory.md §1.10).
@@ -185,51 +189,6 @@ pub fn triangulate(mesh: &Mesh) -> (Vec<[usize; 3]>, Vec<usize>) {
     (triangles, owner)
 }
 
-/// How many interior nodes of `mesh` are corners of exactly four of its
-/// bending (sub-)triangles ([`triangulate`]), and how many interior nodes
-/// it has (those on no edge of a single triangle).
-///
-/// On a mesh whose squares alternate their diagonals (a criss-cross
-/// "checkerboard": Gmsh's transfinite `Alternate`), half the interior
-/// nodes are corners of four triangles and half of eight, and every
-/// triangle's quadratic surface is fitted through two lines of three
-/// nodes crossing at its four-triangle corner: its curvatures are second
-/// differences about that node. The eight-triangle nodes can then sit a
-/// little above or below the surface through the others (an `O(h^2)`
-/// offset) and cancel part of every triangle's curvature, and the plate
-/// bends too easily by a factor that refinement does not change (+72 %
-/// on the simply supported plate at 16 x 16 and 24 x 24 squares;
-/// docs/validation.md, "Criss-cross meshes"). A lone four-triangle node
-/// is a local soft spot that refinement shrinks.
-pub fn four_triangle_nodes(mesh: &Mesh) -> (usize, usize) {
-    let (triangles, _) = triangulate(mesh);
-    let n = mesh.nodes.len();
-    let mut corners = vec![0usize; n];
-    let mut edges: std::collections::HashMap<(usize, usize), usize> =
-        std::collections::HashMap::with_capacity(3 * triangles.len() / 2 + 1);
-    for tri in &triangles {
-        for m in 0..3 {
-            corners[tri[m]] += 1;
-            let (a, b) = (tri[m], tri[(m + 1) % 3]);
-            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
-        }
-    }
-    let mut boundary = vec![false; n];
-    for (&(a, b), &count) in &edges {
-        if count == 1 {
-            boundary[a] = true;
-            boundary[b] = true;
-        }
-    }
-    let interior = (0..n).filter(|&a| !boundary[a] && corners[a] > 0);
-    let (mut four, mut all) = (0, 0);
-    for a in interior {
-        all += 1;
-        four += usize::from(corners[a] == 4);
-    }
-    (four, all)
-}
-
 /// The (sub-)triangles of a mesh ([`triangulate`]) and, for each, the
 /// node opposite each of its edges across the neighbouring triangle.
 struct Neighbours {
@@ -239,6 +198,9 @@ struct Neighbours {
     /// `opposite[t][m]`: the node opposite the edge of triangle `t` that
     /// is opposite its vertex `m`, `None` on a boundary.
     opposite: Vec<[Option<usize>; 3]>,
+    /// `across[t][m]`: the triangle across that edge and the index of the
+    /// edge's opposite vertex in it, `None` on a boundary.
+    across: Vec<[Option<(usize, usize)>; 3]>,
 }
 
 impl Neighbours {
@@ -255,12 +217,15 @@ impl Neighbours {
             }
         }
         let mut opposite = vec![[None; 3]; triangles.len()];
+        let mut across = vec![[None; 3]; triangles.len()];
         for (key, list) in &edges {
             match list.as_slice() {
                 [_] => {}
                 &[(t, m), (s, k)] => {
                     opposite[t][m] = Some(triangles[s][k]);
                     opposite[s][k] = Some(triangles[t][m]);
+                    across[t][m] = Some((s, k));
+                    across[s][k] = Some((t, m));
                 }
                 _ => {
                     let mut elements: Vec<usize> = list.iter().map(|&(t, _)| owner[t]).collect();
@@ -277,16 +242,109 @@ impl Neighbours {
             triangles,
             owner,
             opposite,
+            across,
         })
+    }
+
+    /// The nodes sharing a triangle with each node.
+    fn adjacency(&self, nodes: usize) -> Vec<Vec<usize>> {
+        let mut adjacent = vec![Vec::new(); nodes];
+        for tri in &self.triangles {
+            for &a in tri {
+                for &b in tri {
+                    if a != b && !adjacent[a].contains(&b) {
+                        adjacent[a].push(b);
+                    }
+                }
+            }
+        }
+        adjacent
+    }
+
+    /// The unit normal of triangle `t` at positions `x` (zero where it
+    /// has no area: the patch refuses it).
+    fn normal(&self, t: usize, x: &[[f64; 3]]) -> [f64; 3] {
+        use crate::vec3::{cross, norm, scale, sub};
+        let [a, b, c] = self.triangles[t].map(|v| x[v]);
+        let m = cross(sub(b, a), sub(c, a));
+        let r = norm(m);
+        if r > 0.0 { scale(m, 1.0 / r) } else { [0.0; 3] }
+    }
+
+    /// The fit of every edge ([`edge`]) at reference positions `x`, and for
+    /// each triangle the index of the fit of its edge opposite each vertex;
+    /// `clamped(a)`: node `a` is held by a clamp.
+    fn edge_fits(
+        &self,
+        x: &[[f64; 3]],
+        clamped: impl Fn(usize) -> bool,
+    ) -> (Vec<EdgeFit>, Vec<[usize; 3]>) {
+        let adjacent = self.adjacency(x.len());
+        let mut index = vec![[usize::MAX; 3]; self.triangles.len()];
+        let mut fits = Vec::with_capacity(3 * self.triangles.len() / 2 + 1);
+        for t in 0..self.triangles.len() {
+            for m in 0..3 {
+                if index[t][m] != usize::MAX {
+                    continue;
+                }
+                let tri = self.triangles[t];
+                let (a, b) = (tri[(m + 1) % 3], tri[(m + 2) % 3]);
+                let ends = [a.min(b), a.max(b)];
+                let other = self.across[t][m];
+                let mut outer = Vec::with_capacity(4);
+                for (u, k) in std::iter::once((t, m)).chain(other) {
+                    for kk in (0..3).filter(|&kk| kk != k) {
+                        outer.extend(self.opposite[u][kk]);
+                    }
+                }
+                let opposite = [Some(tri[m]), other.map(|(u, k)| self.triangles[u][k])];
+                // Further candidates: the neighbours of the four nodes,
+                // nearest the midpoint first.
+                let mid = crate::vec3::scale(crate::vec3::add(x[a], x[b]), 0.5);
+                let mut further: Vec<usize> = Vec::new();
+                if other.is_some() {
+                    for &v in ends.iter().chain(opposite.iter().flatten()) {
+                        for &w in &adjacent[v] {
+                            if !further.contains(&w) {
+                                further.push(w);
+                            }
+                        }
+                    }
+                    further.sort_by(|&p, &q| {
+                        let d = |k: usize| crate::vec3::norm(crate::vec3::sub(x[k], mid));
+                        d(p).total_cmp(&d(q)).then(p.cmp(&q))
+                    });
+                }
+                let nodes = EdgeNodes {
+                    ends,
+                    opposite,
+                    outer: &outer,
+                    further: &further,
+                    normals: [
+                        Some(self.normal(t, x)),
+                        other.map(|(u, _)| self.normal(u, x)),
+                    ],
+                };
+                index[t][m] = fits.len();
+                if let Some((u, k)) = other {
+                    index[u][k] = fits.len();
+                }
+                fits.push(EdgeFit::new(&nodes, x, clamped(a) && clamped(b)));
+            }
+        }
+        (fits, index)
     }
 }
 
 /// The stencils the bending patches of `mesh` have, in CSR form `(ptr,
-/// nodes)`: each (sub-)triangle's three nodes and the nodes opposite its
-/// edges, for the triangles with a neighbour (a lone triangle cannot
-/// bend) — the node sets of [`Bending::stencils`], found from the mesh's
-/// topology alone, without fitting the patches: what the Hessian's
-/// pattern must hold, known before the model is built.
+/// nodes)`, found from the mesh's topology alone, without fitting the
+/// patches: each (sub-)triangle with a neighbour, its three nodes, the
+/// nodes opposite its edges and, beyond each neighbour, the nodes opposite
+/// the neighbour's other two edges ([`edge`]) — what the Hessian's pattern
+/// must hold, known before the model is built. The two further nodes an
+/// edge's fit may add where the nodes around it do not fix its quadratic
+/// (near corners, in strips one element wide) are not counted: the
+/// pattern's size is an estimate there.
 ///
 /// # Errors
 /// [`BendingError::NonManifold`], as [`Bending::new`].
@@ -294,12 +352,27 @@ pub fn stencils_of(mesh: &Mesh) -> Result<(Vec<usize>, Vec<usize>), BendingError
     let n = Neighbours::of(mesh)?;
     let mut ptr = vec![0];
     let mut nodes = Vec::new();
-    for (tri, opposite) in n.triangles.iter().zip(&n.opposite) {
-        if opposite.iter().all(Option::is_none) {
+    for (t, tri) in n.triangles.iter().enumerate() {
+        if n.opposite[t].iter().all(Option::is_none) {
             continue;
         }
+        let start = nodes.len();
         nodes.extend_from_slice(tri);
-        nodes.extend(opposite.iter().flatten());
+        let push = |a: usize, nodes: &mut Vec<usize>| {
+            if !nodes[start..].contains(&a) {
+                nodes.push(a);
+            }
+        };
+        for a in n.opposite[t].iter().flatten() {
+            push(*a, &mut nodes);
+        }
+        for &(u, k) in n.across[t].iter().flatten() {
+            for kk in (0..3).filter(|&kk| kk != k) {
+                if let Some(a) = n.opposite[u][kk] {
+                    push(a, &mut nodes);
+                }
+            }
+        }
         ptr.push(nodes.len());
     }
     Ok((ptr, nodes))
@@ -329,25 +402,6 @@ pub struct Bending {
 /// Patches per parallel task: enough work to outweigh a task's hand-off.
 const CHUNK: usize = 256;
 
-/// Why a patch's nodes admit no unique quadratic surface, from the nodes
-/// opposite its triangle's edges: two of them the same node — an interior
-/// node with only three neighbours, as where a triangle was split at its
-/// centroid — leaves the patch five distinct nodes, or fewer (issue 35:
-/// the message said six nodes lay on a conic); else six on a conic.
-fn conic_reason(opposite: [Option<usize>; 3]) -> String {
-    let given: Vec<usize> = opposite.iter().flatten().copied().collect();
-    let repeated = given
-        .iter()
-        .enumerate()
-        .find_map(|(i, a)| given[i + 1..].contains(a).then_some(*a));
-    match repeated {
-        Some(node) => format!(
-            "the nodes opposite two of its edges are one and the same, node {node}: the vertex between those edges is an interior node with only three neighbours (as where a triangle was split at its centroid), and the patch has fewer than the six distinct nodes a quadratic surface needs; remesh this region or flip an edge there"
-        ),
-        None => "its six nodes lie on a conic, so no quadratic surface passes through them uniquely; remesh this region".into(),
-    }
-}
-
 impl Bending {
     /// The patches of `mesh` for `rigidity`, fitted on the mesh's
     /// (reference) positions; `clamped[a]` (empty: none) marks the nodes
@@ -358,44 +412,32 @@ impl Bending {
         rigidity: BendingRigidity,
         clamped: &[bool],
     ) -> Result<Self, BendingError> {
-        let Neighbours {
-            triangles,
-            owner,
-            opposite,
-        } = Neighbours::of(mesh)?;
+        let neighbours = Neighbours::of(mesh)?;
         let d = rigidity.matrix();
         let axis = rigidity.axis();
         let is_clamped = |a: usize| clamped.get(a).copied().unwrap_or(false);
-        let mut patches = Vec::with_capacity(triangles.len());
-        for (t, tri) in triangles.iter().enumerate() {
+        let (fits, index) = neighbours.edge_fits(&mesh.nodes, is_clamped);
+        let mut patches = Vec::with_capacity(neighbours.triangles.len());
+        for (t, tri) in neighbours.triangles.iter().enumerate() {
             if tri.iter().all(|&a| is_clamped(a)) {
                 continue; // held, with its slope: it cannot bend
             }
-            // The edge (opposite vertex m) whose two nodes are clamped.
-            let edge =
-                (0..3).find(|&m| is_clamped(tri[(m + 1) % 3]) && is_clamped(tri[(m + 2) % 3]));
-            if edge.is_none() && opposite[t].iter().all(Option::is_none) {
-                continue; // a lone triangle cannot bend
-            }
-            let patch =
-                Patch::fit(*tri, opposite[t], &mesh.nodes, &d, axis, edge).map_err(|e| {
-                    let element = owner[t];
-                    match e {
-                        PatchError::Frame => BendingError::Axis(AxisError {
-                            element,
-                            axis: axis.unwrap_or_default(),
-                        }),
-                        PatchError::Degenerate => BendingError::Patch {
-                            element,
-                            reason: "the triangle has no area".into(),
-                        },
-                        PatchError::Conic => BendingError::Patch {
-                            element,
-                            reason: conic_reason(opposite[t]),
-                        },
-                    }
-                })?;
-            patches.push(patch);
+            let edges = index[t].map(|i| &fits[i]);
+            let patch = Patch::fit(*tri, edges, &mesh.nodes, &d, axis).map_err(|e| {
+                let element = neighbours.owner[t];
+                match e {
+                    PatchError::Frame => BendingError::Axis(AxisError {
+                        element,
+                        axis: axis.unwrap_or_default(),
+                    }),
+                    PatchError::Degenerate => BendingError::Patch {
+                        element,
+                        reason: "the triangle has no area".into(),
+                    },
+                }
+            })?;
+            // None: all three edges free, a lone triangle cannot bend.
+            patches.extend(patch);
         }
         let mut ptr = Vec::with_capacity(patches.len() + 1);
         let mut nodes = Vec::new();
@@ -487,7 +529,6 @@ impl Bending {
                 let len = nodes.len();
                 p.positions(|a| [y[3 * a], y[3 * a + 1], y[3 * a + 2]], &mut x);
                 energy += kernel::evaluate(p, &x[..len], want_h, local);
-                kernel::fold(p, local, want_h);
                 if want_h && project.is_some_and(|flags| nodes.iter().any(|&a| flags[a])) {
                     crate::psd::project(
                         local.hessian.as_flattened_mut(),
@@ -562,48 +603,13 @@ mod tests {
     use crate::mesh::ElementOrder;
     use crate::mesh::generate::{Pattern, rectangle};
 
-    /// A `n x n` grid of unit squares whose diagonals alternate like a
-    /// checkerboard (Gmsh's transfinite `Alternate`): node `(x, y)`
-    /// is a corner of four triangles where `x + y` is odd, of eight
-    /// where it is even.
-    fn criss_cross(n: usize) -> Mesh {
-        let mesh =
-            crate::mesh::generate::grid([1.0, 1.0], [n, n], [0.0; 3], |i, j| (i + j) % 2 == 0);
-        mesh.validate().unwrap();
-        mesh
-    }
-
-    /// The criss-cross grid's interior nodes of odd `x + y` are the
-    /// corners of four triangles (4 of the 9 of a 4 x 4 grid, 24 of the
-    /// 49 of an 8 x 8); the rectangle's own patterns — the union jack
-    /// included, whose centre has eight — have none.
-    #[test]
-    fn four_triangle_nodes_find_a_criss_cross_mesh() {
-        assert_eq!(four_triangle_nodes(&criss_cross(4)), (4, 9));
-        assert_eq!(four_triangle_nodes(&criss_cross(8)), (24, 49));
-        for pattern in [Pattern::Right, Pattern::Left, Pattern::Alternate] {
-            for order in [ElementOrder::Linear, ElementOrder::Quadratic] {
-                let mesh = rectangle([1.0, 1.0], [8, 8], pattern, [0.0; 3], order);
-                let interior = if order == ElementOrder::Linear {
-                    49
-                } else {
-                    225
-                };
-                assert_eq!(
-                    four_triangle_nodes(&mesh),
-                    (0, interior),
-                    "{pattern:?} {order:?}"
-                );
-            }
-        }
-    }
-
     /// A triangle of a 3 x 3 grid split at its centroid (node 16, with
-    /// three neighbours): the patch of a sub-triangle finds the same node
-    /// opposite two of its edges, and the error says so, naming it (issue
-    /// 35: it said that six nodes lay on a conic).
+    /// three neighbours): the patches through it are fitted (the fit of
+    /// each edge takes further neighbours where it needs them), and the
+    /// curvature of a quadratic surface is exact on them. The patch
+    /// through a triangle's six nodes refused it (issue 35).
     #[test]
-    fn a_node_with_three_neighbours_is_named() {
+    fn a_node_with_three_neighbours_bends() {
         let mut mesh = rectangle(
             [0.3, 0.3],
             [3, 3],
@@ -611,7 +617,6 @@ mod tests {
             [0.0; 3],
             ElementOrder::Linear,
         );
-        // Split the middle square's first triangle at its centroid.
         let e = 8;
         let [a, b, c] = [0, 1, 2].map(|k| mesh.connectivity[3 * e + k]);
         let g = mesh.nodes.len();
@@ -620,18 +625,34 @@ mod tests {
         mesh.nodes.push(centroid);
         mesh.connectivity[3 * e..3 * e + 3].copy_from_slice(&[a, b, g]);
         mesh.connectivity.extend_from_slice(&[b, c, g, c, a, g]);
-        let e = Bending::new(&mesh, BendingRigidity::Isotropic(2e-5), &[]).unwrap_err();
-        let text = e.to_string();
-        assert!(
-            text.contains("an interior node with only three neighbours")
-                && !text.contains("six nodes lie on a conic"),
-            "{text}"
-        );
+        let bending = Bending::new(&mesh, BendingRigidity::Isotropic(2e-5), &[]).unwrap();
+        // z = 10 x^2 + 20 y^2 seen by each patch round the centroid (normal
+        // +z there: a flat triangle's curvature is (20, 40, 0) in any frame
+        // rotated about z, so compare the invariants).
+        let x: Vec<[f64; 3]> = mesh
+            .nodes
+            .iter()
+            .map(|p| [p[0], p[1], 10.0 * p[0] * p[0] + 20.0 * p[1] * p[1]])
+            .collect();
+        for p in bending
+            .patches()
+            .iter()
+            .filter(|p| p.nodes()[..3].contains(&g))
+        {
+            let xl: Vec<[f64; 3]> = p.nodes().iter().map(|&a| x[a]).collect();
+            let n = patch::normal(&xl).0;
+            let k = p.curvature(&xl);
+            let (trace, det) = (k[0] + k[1], k[0] * k[1] - 0.25 * k[2] * k[2]);
+            let want = (60.0 * n[2], 800.0 * n[2] * n[2]);
+            assert!((trace - want.0).abs() < 1e-9 * want.0, "{k:?}");
+            assert!((det - want.1).abs() < 1e-8 * want.1, "{k:?}");
+        }
     }
 
     /// The stencils found from the topology alone are the patches' own,
-    /// in order, for every element order (node sets: the order inside a
-    /// stencil may differ).
+    /// in order, for every element order, but for the further nodes a fit
+    /// adds near corners (node sets: the order inside a stencil may
+    /// differ).
     #[test]
     fn stencils_of_are_the_patches_stencils() {
         for order in [
@@ -650,7 +671,16 @@ mod tests {
             let found: Vec<Vec<usize>> =
                 ptr.windows(2).map(|w| sorted(&nodes[w[0]..w[1]])).collect();
             let fitted: Vec<Vec<usize>> = bending.stencils().map(sorted).collect();
-            assert_eq!(found, fitted, "{order:?}");
+            assert_eq!(found.len(), fitted.len(), "{order:?}");
+            let mut further = 0;
+            for (f, p) in found.iter().zip(&fitted) {
+                assert!(f.iter().all(|a| p.contains(a)), "{order:?}: {f:?} {p:?}");
+                further += p.len() - f.len();
+            }
+            assert!(
+                further <= fitted.len() / 4,
+                "{order:?}: {further} further nodes"
+            );
         }
     }
 

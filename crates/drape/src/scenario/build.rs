@@ -360,9 +360,11 @@ fn check_pattern_memory(
     };
     let n = mesh.order.nodes_per_element();
     let sub_triangles = mesh.element_count() * mesh.order.degree().pow(2);
+    // A bending patch's blocks: the square of its most nodes.
+    let patch_blocks = crate::bending::kernel::MAX_NODES.pow(2);
     let bound = mesh.node_count()
         + mesh.element_count() * n * n
-        + usize::from(bending) * 36 * sub_triangles;
+        + usize::from(bending) * patch_blocks * sub_triangles;
     if pattern_estimate(bound) <= have {
         return Ok(());
     }

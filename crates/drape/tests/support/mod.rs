@@ -1,2 +1,3 @@
 //! Reference solutions the tests compare with.
 pub mod elastica;
+pub mod refine;
