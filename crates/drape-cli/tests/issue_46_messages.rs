@@ -169,3 +169,27 @@ fn a_missing_output_directory_is_called_missing() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--resume` of a completed run that kept no checkpoint says there is
+/// nothing to resume (it said "cannot read the checkpoint: No such file"),
+/// and leaves the run's outputs as they were. With a checkpoint a resume
+/// computes the steps after it again (tests/resume.rs).
+#[test]
+fn resuming_a_completed_run_without_a_checkpoint_says_nothing_is_left() {
+    let dir = scratch("i46-completed");
+    let scenario = falling_plate(&dir, 4, "");
+    let out = dir.join("out");
+    assert!(run(&scenario, &out).status.success());
+    let summary = std::fs::read(out.join("summary.json")).unwrap();
+    let history = std::fs::read(out.join("history.csv")).unwrap();
+    let (code, e) = drape_on(&out, &["run", "--resume", "DIR"]);
+    assert_eq!(code, Some(2), "{e}");
+    assert!(
+        e.contains("nothing to resume: the run completed") && e.contains("(without --resume)"),
+        "{e}"
+    );
+    assert!(!e.contains("cannot read"), "{e}");
+    assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
+    assert_eq!(std::fs::read(out.join("history.csv")).unwrap(), history);
+    let _ = std::fs::remove_dir_all(&dir);
+}

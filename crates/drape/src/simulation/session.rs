@@ -165,8 +165,9 @@ impl Session {
         Ok(path_from_bytes(bytes))
     }
 
-    /// Before a resume is set up: each input file the checkpoint recorded
-    /// must be as it was ([`super::check_resume_inputs`]); a refusal is
+    /// Before a resume is set up: a completed run must have kept a
+    /// checkpoint, and each input file the checkpoint recorded must be as it was
+    /// ([`super::check_resume_inputs`]); a refusal is
     /// recorded ([`Session::refuse`]) and its message returned.
     pub fn check_inputs(&self) -> Result<(), String> {
         super::check_resume_inputs(&self.dir).map_err(|error| {

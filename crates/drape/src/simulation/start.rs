@@ -44,6 +44,17 @@ pub enum SetupError {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ResumeError {
+    /// The run in the directory completed (its summary says so) and kept
+    /// no checkpoint: there is nothing to resume. (With a checkpoint, a
+    /// resume computes the steps after it again.)
+    #[error(
+        "nothing to resume: the run completed ({}) and kept no checkpoint; to run it again, start a fresh run",
+        summary.display()
+    )]
+    Completed {
+        /// The summary that says the run completed.
+        summary: PathBuf,
+    },
     /// The checkpoint cannot be read, or does not fit the scenario, its
     /// input files or its model (the error names the field or the file).
     #[error("{}: {error}", path.display())]
@@ -91,7 +102,8 @@ impl ResumeError {
     pub fn suggests_fresh_run(&self) -> bool {
         matches!(
             self,
-            ResumeError::MissingFrame { .. }
+            ResumeError::Completed { .. }
+                | ResumeError::MissingFrame { .. }
                 | ResumeError::Checkpoint {
                     error: CheckpointError::InputChanged { .. }
                         | CheckpointError::InputMissing { .. },
@@ -101,7 +113,8 @@ impl ResumeError {
     }
 }
 
-/// Before a resume is set up: each input file the checkpoint in `out`
+/// Before a resume is set up: a run that completed must have kept a
+/// checkpoint ([`ResumeError::Completed`]), and each input file the checkpoint in `out`
 /// recorded (the mesh, the obstacles' meshes) must still hold the bytes it
 /// had, or the resume is refused naming the file — changed, missing or
 /// unreadable. A checkpoint that cannot be read, or one that recorded no
@@ -113,6 +126,7 @@ impl ResumeError {
 /// is reported as such rather than as an error of its contents (a mesh
 /// that no longer reads) or of the model's sizes.
 pub fn check_resume_inputs(out: &Path) -> Result<(), ResumeError> {
+    completed(out)?;
     let path = checkpoint_path(out);
     let Ok(bytes) = std::fs::read(&path) else {
         return Ok(());
@@ -137,6 +151,24 @@ pub fn check_resume_inputs(out: &Path) -> Result<(), ResumeError> {
         return Err(ResumeError::Checkpoint { path, error });
     }
     Ok(())
+}
+
+/// [`ResumeError::Completed`] when `out` holds no checkpoint and its
+/// summary says the run completed (a run without `checkpoint_every` keeps
+/// none): said so rather than that the checkpoint cannot be read.
+fn completed(out: &Path) -> Result<(), ResumeError> {
+    if checkpoint_path(out).exists() {
+        return Ok(());
+    }
+    let summary = out.join("summary.json");
+    let status = std::fs::read(&summary)
+        .ok()
+        .and_then(|bytes| serde_json::from_slice::<serde_json::Value>(&bytes).ok())
+        .and_then(|value| value.get("status").cloned());
+    match status {
+        Some(status) if status == "completed" => Err(ResumeError::Completed { summary }),
+        _ => Ok(()),
+    }
 }
 
 /// Where a session starts: the state, and what the loop keeps of the run
@@ -165,6 +197,7 @@ pub(super) fn resume<'a>(
     front: Front,
 ) -> Result<Start<'a>, RunError> {
     let refused = |error| RunError::Resume { error, front };
+    completed(out).map_err(refused)?;
     let path = checkpoint_path(out);
     let unusable = |error| {
         refused(ResumeError::Checkpoint {
