@@ -48,10 +48,11 @@ pub const OWN_FILES: [&str; 7] = [
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum DirectoryError {
-    /// Another process writes into it.
+    /// Another process writes into it, or another run of this process
+    /// (two threads calling the library on one directory).
     #[error(
-        "{dir} is in use by another drape process{}: wait for it to end, or write into another directory (--out; out= from Python)",
-        pid.map(|p| format!(" (process {p})")).unwrap_or_default()
+        "{dir} is in use by {}: wait for it to end, or write into another directory (--out; out= from Python)",
+        holder(*pid)
     )]
     Busy {
         /// The directory.
@@ -93,6 +94,16 @@ pub enum DirectoryError {
         /// The error.
         error: std::io::Error,
     },
+}
+
+/// Who holds a directory's lock, from the process id in its lock file:
+/// this process itself when the id is its own.
+fn holder(pid: Option<u32>) -> String {
+    match pid {
+        Some(p) if p == std::process::id() => format!("another run in this process (process {p})"),
+        Some(p) => format!("another drape process (process {p})"),
+        None => "another drape process".into(),
+    }
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> DirectoryError + '_ {
@@ -329,7 +340,10 @@ mod tests {
         let dir = scratch("lock");
         let held = lock(&dir).expect("free");
         match lock(&dir) {
-            Err(DirectoryError::Busy { pid, .. }) => assert_eq!(pid, Some(std::process::id())),
+            Err(e @ DirectoryError::Busy { pid, .. }) => {
+                assert_eq!(pid, Some(std::process::id()));
+                assert!(e.to_string().contains("another run in this process"), "{e}");
+            }
             other => panic!("{other:?}"),
         }
         drop(held);
