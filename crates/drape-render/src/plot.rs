@@ -510,6 +510,23 @@ fn y_range(p: &Panel) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// The most y ticks a panel asks plotters for: 6, or for a count (whole
+/// numbers) no more than the whole numbers in its range, so that plotters'
+/// step (1, 2 or 5 times a power of ten, the finest that gives no more
+/// ticks than asked) is never below 1 — at 0 to 3 folds six ticks were
+/// 0, 0.5, 1, … and printed "0, 1, 1, 2, 2".
+fn y_label_count(p: &Panel, (y0, y1): (f64, f64)) -> usize {
+    const MOST: usize = 6;
+    if p.integer_y {
+        // y_range gives a count's panel whole-number ends, 0 to at least 2.
+        let whole = (y1 - y0).floor();
+        if whole.is_finite() && whole >= 1.0 && whole < MOST as f64 {
+            return whole as usize + 1;
+        }
+    }
+    MOST
+}
+
 /// What the plot's title area says: the title, and a note under it.
 struct Heading<'a> {
     title: &'a str,
@@ -599,7 +616,7 @@ fn draw_panel<DB: DrawingBackend>(
         .label_style(label_font.clone())
         .axis_desc_style(desc_font)
         .x_labels(7)
-        .y_labels(6)
+        .y_labels(y_label_count(p, (y0, y1)))
         .x_label_formatter(&x_fmt)
         .light_line_style(RGBColor(240, 240, 240))
         .bold_line_style(RGBColor(222, 222, 222))
@@ -755,4 +772,31 @@ fn downsample(buf: &[u8], w: usize, h: usize, f: usize) -> RgbImage {
         }
     }
     img
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plotters::coord::ranged1d::Ranged;
+
+    /// Issue 46: a count's panel (folds, Newton iterations) has whole-number
+    /// ticks only, each printed once, whatever the largest count; plotters'
+    /// own choice of ticks is what is checked.
+    #[test]
+    fn a_counts_ticks_are_whole_numbers() {
+        for most in 0..=60 {
+            let mut p = Panel::new("Folds", "folds");
+            p.series
+                .push(Series::line("folds", vec![0.0, most as f64], palette(0)));
+            p.integer_y = true;
+            let (y0, y1) = y_range(&p);
+            let axis: RangedCoordf64 = (y0..y1).into();
+            let ticks = axis.key_points(y_label_count(&p, (y0, y1)));
+            assert!(ticks.len() >= 2, "{most}: {ticks:?}");
+            assert!(
+                ticks.iter().all(|t| t.fract() == 0.0),
+                "{most} folds: ticks {ticks:?}"
+            );
+        }
+    }
 }
