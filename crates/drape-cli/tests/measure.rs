@@ -273,10 +273,7 @@ fn a_directory_without_outputs_is_refused() {
     );
     let missing = dir.join("nowhere");
     let e = refused(&[missing.to_str().unwrap()]);
-    assert!(
-        e.contains("nowhere") && e.contains("does not exist"),
-        "{e}"
-    );
+    assert!(e.contains("nowhere") && e.contains("does not exist"), "{e}");
     // A collection that lists no frame.
     std::fs::write(
         dir.join("fields.pvd"),
