@@ -173,7 +173,15 @@ where
             .compare_exchange(false, true, Ordering::Acquire, Ordering::Relaxed)
             .is_ok()
     }) else {
-        return (a(), b());
+        // Both here; a panic in `a` still lets `b` run first, as on two
+        // threads (with the helper busy in another test or caller, `b`
+        // was skipped and the promise above broken).
+        let ra = panic::catch_unwind(AssertUnwindSafe(a));
+        let rb = b();
+        return match ra {
+            Ok(ra) => (ra, rb),
+            Err(e) => panic::resume_unwind(e),
+        };
     };
     let job = StackJob {
         func: UnsafeCell::new(Some(b)),

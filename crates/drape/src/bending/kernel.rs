@@ -102,7 +102,12 @@ pub fn energy(patch: &Patch, x: &[[f64; 3]]) -> f64 {
 }
 
 /// The bending energy of `patch` at `x`; with `hessian`, also its gradient
-/// and Hessian into `out` (the gradient always).
+/// and Hessian into `out` (the gradient always). With `gauss_newton`, the
+/// Hessian is its Gauss–Newton part `K^T (A D') K` alone, positive
+/// semi-definite by construction: what the projected Newton asks for
+/// (`project` of [`crate::bending::Bending::add`]), without the
+/// eigendecomposition of a matrix of up to 54 x 54 that the nearest
+/// semi-definite matrix would take.
 //
 // Longer than a function should be, and kept whole: it is one formula,
 // the energy, its gradient and its Hessian (Gauss–Newton and curvature
@@ -111,6 +116,17 @@ pub fn energy(patch: &Patch, x: &[[f64; 3]]) -> f64 {
 // were checked in; cut into pieces, each would take most of them as
 // arguments.
 pub fn evaluate(patch: &Patch, x: &[[f64; 3]], hessian: bool, out: &mut Local) -> f64 {
+    evaluate_with(patch, x, hessian, false, out)
+}
+
+/// [`evaluate`], the Hessian's Gauss–Newton part alone with `gauss_newton`.
+pub fn evaluate_with(
+    patch: &Patch,
+    x: &[[f64; 3]],
+    hessian: bool,
+    gauss_newton: bool,
+    out: &mut Local,
+) -> f64 {
     let len = patch.len();
     debug_assert_eq!(x.len(), len);
     let (n, r) = normal(x);
@@ -180,6 +196,9 @@ pub fn evaluate(patch: &Patch, x: &[[f64; 3]], hessian: bool, out: &mut Local) -
         }
     }
 
+    if gauss_newton {
+        return energy;
+    }
     // Curvature part: mu_k J_l + mu_l J_k^T + S_kl.
     let mu: [f64; MAX_NODES] = std::array::from_fn(|k| {
         if k < len {

@@ -394,9 +394,12 @@ pub struct Bending {
     blocks: Vec<usize>,
     /// Where each patch's blocks start in `blocks`.
     block_start: Vec<usize>,
-    /// Patch lists that share no node, for the parallel assembly (empty:
-    /// serial, in patch order).
+    /// Patch lists that share no node, for the parallel assembly.
     colours: Vec<Vec<usize>>,
+    /// Each colour in rayon's chunks (a model of
+    /// [`crate::model::PARALLEL_ABOVE`] elements or more), else in two
+    /// halves on [`crate::par`]'s helper thread.
+    rayon: bool,
 }
 
 /// Patches per parallel task: enough work to outweigh a task's hand-off.
@@ -454,6 +457,7 @@ impl Bending {
             blocks: Vec::new(),
             block_start: Vec::new(),
             colours: Vec::new(),
+            rayon: false,
         })
     }
 
@@ -477,11 +481,9 @@ impl Bending {
     pub(crate) fn attach(&mut self, pattern: &SparsePattern, parallel: bool) {
         self.blocks.clear();
         self.block_start.clear();
-        self.colours = if parallel {
-            crate::solver::pattern::colour_elements(pattern.dimension() / 3, self.stencils())
-        } else {
-            Vec::new()
-        };
+        self.colours =
+            crate::solver::pattern::colour_elements(pattern.dimension() / 3, self.stencils());
+        self.rayon = parallel;
         for p in &self.patches {
             self.block_start.push(self.blocks.len());
             for &a in p.nodes() {
@@ -498,15 +500,18 @@ impl Bending {
     /// Adds the bending energy's gradient to `g` and, if given, its
     /// Hessian to `h` (values on `pattern`, the model's
     /// [`Model::pattern`](crate::model::Model::pattern) this term was
-    /// attached to when the model was built); returns the energy (J). With colours (a mesh of
-    /// [`crate::model::PARALLEL_ABOVE`] elements or more) each colour's
-    /// patches run in parallel chunks, whose energies are summed in order:
-    /// the result does not depend on the number of threads.
+    /// attached to when the model was built); returns the energy (J). The
+    /// patches run colour by colour (no two of a colour share a node):
+    /// each colour in rayon's chunks on a mesh of
+    /// [`crate::model::PARALLEL_ABOVE`] elements or more, else in two
+    /// halves on `par`'s helper thread; the energies are summed in a fixed
+    /// order, so the result does not depend on the number of threads.
     ///
     /// With `project`, the Hessian of every patch with a node flagged
-    /// there (one flag per node) is replaced by its positive semi-definite
-    /// part ([`crate::psd`]) before it is added (the projected Newton of
-    /// `solver::newton`).
+    /// there (one flag per node) is replaced by its Gauss–Newton part `K^T
+    /// (A D') K`, positive semi-definite by construction, before it is
+    /// added (the projected Newton of `solver::newton`;
+    /// [`kernel::evaluate_with`]).
     pub(crate) fn add(
         &self,
         pattern: &SparsePattern,
@@ -528,14 +533,9 @@ impl Bending {
                 let nodes = p.nodes();
                 let len = nodes.len();
                 p.positions(|a| [y[3 * a], y[3 * a + 1], y[3 * a + 2]], &mut x);
-                energy += kernel::evaluate(p, &x[..len], want_h, local);
-                if want_h && project.is_some_and(|flags| nodes.iter().any(|&a| flags[a])) {
-                    crate::psd::project(
-                        local.hessian.as_flattened_mut(),
-                        3 * len,
-                        kernel::MAX_DOFS,
-                    );
-                }
+                let gauss_newton =
+                    want_h && project.is_some_and(|flags| nodes.iter().any(|&a| flags[a]));
+                energy += kernel::evaluate_with(p, &x[..len], want_h, gauss_newton, local);
                 // SAFETY: patches that run at once (of one colour) share no
                 // node, so the gradient entries and Hessian blocks written
                 // below are disjoint across threads; the indices are those
@@ -567,11 +567,24 @@ impl Bending {
             }
             energy
         };
-        if self.colours.is_empty() {
-            let mut local = kernel::Local::new();
-            return work(&mut local, &mut (0..self.patches.len()));
-        }
         let mut energy = 0.0;
+        if !self.rayon {
+            // Each colour in two halves, the second on the helper thread;
+            // each thread's scratch kept between assemblies (24 kB).
+            thread_local! {
+                static LOCAL: std::cell::RefCell<kernel::Local> =
+                    std::cell::RefCell::new(kernel::Local::new());
+            }
+            let run = |part: &[usize]| {
+                LOCAL.with(|l| work(&mut l.borrow_mut(), &mut part.iter().copied()))
+            };
+            for colour in &self.colours {
+                let (a, b) = colour.split_at(colour.len() / 2);
+                let (ea, eb) = crate::par::join(|| run(a), || run(b));
+                energy += ea + eb;
+            }
+            return energy;
+        }
         for colour in &self.colours {
             let parts: Vec<f64> = colour
                 .par_chunks(CHUNK)
@@ -684,9 +697,10 @@ mod tests {
         }
     }
 
-    /// The parallel assembly (colours, chunks) adds the same gradient and
-    /// Hessian as the serial one, to round-off (the order of the sums
-    /// differs), and to the bit whatever the number of threads.
+    /// The rayon assembly (colours, chunks) adds the same gradient and
+    /// Hessian as the small model's (colours in halves), to round-off (the
+    /// order of the sums differs), and to the bit whatever the number of
+    /// threads.
     #[test]
     fn parallel_assembly_matches_the_serial_one() {
         let mesh = rectangle(
@@ -702,7 +716,7 @@ mod tests {
         let mut parallel = serial.clone();
         serial.attach(&pattern, false);
         parallel.attach(&pattern, true);
-        assert!(parallel.colours.len() > 1);
+        assert!(parallel.colours.len() > 1 && parallel.rayon && !serial.rayon);
         let y: Vec<f64> = mesh
             .nodes
             .iter()
