@@ -396,10 +396,11 @@ pub struct Bending {
     block_start: Vec<usize>,
     /// Patch lists that share no node, for the parallel assembly.
     colours: Vec<Vec<usize>>,
-    /// Each colour in rayon's chunks (a model of
-    /// [`crate::model::PARALLEL_ABOVE`] elements or more), else in two
-    /// halves on [`crate::par`]'s helper thread.
-    rayon: bool,
+    /// Below [`crate::model::PARALLEL_ABOVE`] elements: the patches in two
+    /// halves that share no node, on two threads ([`crate::par`]), then
+    /// those at the interface colour by colour, each colour in two halves;
+    /// `None` from that size on: each colour in rayon's chunks.
+    halves: Option<crate::solver::pattern::Halves>,
 }
 
 /// Patches per parallel task: enough work to outweigh a task's hand-off.
@@ -457,7 +458,7 @@ impl Bending {
             blocks: Vec::new(),
             block_start: Vec::new(),
             colours: Vec::new(),
-            rayon: false,
+            halves: None,
         })
     }
 
@@ -477,13 +478,16 @@ impl Bending {
     }
 
     /// Records where each patch's Hessian blocks lie in `pattern` (which
-    /// must include the stencils).
-    pub(crate) fn attach(&mut self, pattern: &SparsePattern, parallel: bool) {
+    /// must include the stencils), and how the assembly runs: on rayon's
+    /// threads with `parallel`, else in two halves of the patches (at the
+    /// reference positions `nodes`) on two threads.
+    pub(crate) fn attach(&mut self, pattern: &SparsePattern, parallel: bool, nodes: &[[f64; 3]]) {
         self.blocks.clear();
         self.block_start.clear();
         self.colours =
             crate::solver::pattern::colour_elements(pattern.dimension() / 3, self.stencils());
-        self.rayon = parallel;
+        self.halves = (!parallel)
+            .then(|| crate::solver::pattern::Halves::of(nodes, self.stencils(), &self.colours));
         for p in &self.patches {
             self.block_start.push(self.blocks.len());
             for &a in p.nodes() {
@@ -568,9 +572,8 @@ impl Bending {
             energy
         };
         let mut energy = 0.0;
-        if !self.rayon {
-            // Each colour in two halves, the second on the helper thread;
-            // each thread's scratch kept between assemblies (24 kB).
+        if let Some(halves) = &self.halves {
+            // Each thread's scratch kept between assemblies (24 kB).
             thread_local! {
                 static LOCAL: std::cell::RefCell<kernel::Local> =
                     std::cell::RefCell::new(kernel::Local::new());
@@ -578,7 +581,9 @@ impl Bending {
             let run = |part: &[usize]| {
                 LOCAL.with(|l| work(&mut l.borrow_mut(), &mut part.iter().copied()))
             };
-            for colour in &self.colours {
+            let (ea, eb) = crate::par::join(|| run(&halves.first), || run(&halves.second));
+            energy += ea + eb;
+            for colour in &halves.interface {
                 let (a, b) = colour.split_at(colour.len() / 2);
                 let (ea, eb) = crate::par::join(|| run(a), || run(b));
                 energy += ea + eb;
@@ -714,9 +719,9 @@ mod tests {
         let pattern =
             SparsePattern::new(mesh.node_count(), mesh.elements().chain(serial.stencils()));
         let mut parallel = serial.clone();
-        serial.attach(&pattern, false);
-        parallel.attach(&pattern, true);
-        assert!(parallel.colours.len() > 1 && parallel.rayon && !serial.rayon);
+        serial.attach(&pattern, false, &mesh.nodes);
+        parallel.attach(&pattern, true, &mesh.nodes);
+        assert!(parallel.colours.len() > 1 && parallel.halves.is_none() && serial.halves.is_some());
         let y: Vec<f64> = mesh
             .nodes
             .iter()

@@ -25,6 +25,7 @@ use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::quadrature::QuadratureRule;
 use crate::solver::SparsePattern;
+use crate::solver::pattern::Halves;
 use crate::solver::pattern::colour_elements;
 
 /// Everything that defines the discrete problem, independent of time.
@@ -216,14 +217,14 @@ impl ModelBuilder {
         };
         let colours = colour_elements(mesh.node_count(), mesh.elements());
         let parallel = parallel_for(&mesh);
-        let halves = (!parallel).then(|| Halves::new(&mesh, &colours));
+        let halves = (!parallel).then(|| Halves::of(&mesh.nodes, mesh.elements(), &colours));
         let mut bending = match bending {
             Some(rigidity) => Some(Bending::new(&mesh, rigidity, &clamped)?),
             None => None,
         };
         let layout = Layout::new(&mesh, &colours, halves.as_ref(), bending.as_ref());
         if let Some(b) = &mut bending {
-            b.attach(&layout.pattern, parallel);
+            b.attach(&layout.pattern, parallel, &mesh.nodes);
         }
         let mass = mass::assemble_mass(
             &mesh,
@@ -347,97 +348,6 @@ pub enum ModelError {
         /// Its lumped mass.
         mass: f64,
     },
-}
-
-/// The small-mesh assembly order: elements `first` and `second` (each in
-/// index order) share no node, so two threads can add them up at once;
-/// the `interface` elements, which touch nodes of both, follow by colour.
-#[derive(Debug, Clone)]
-pub(crate) struct Halves {
-    pub(crate) first: Vec<usize>,
-    pub(crate) second: Vec<usize>,
-    pub(crate) interface: Vec<Vec<usize>>,
-}
-
-impl Halves {
-    /// Splits the elements at the median of their centroids along the
-    /// mesh's longest extent; an element touching a node that elements
-    /// of both sides touch goes to the interface.
-    fn new(mesh: &Mesh, colours: &[Vec<usize>]) -> Self {
-        let count = mesh.element_count();
-        let centroids: Vec<[f64; 3]> = (0..count)
-            .map(|e| {
-                let el = mesh.element(e);
-                let mut c = [0.0; 3];
-                for &a in el {
-                    for i in 0..3 {
-                        c[i] += mesh.nodes[a][i] / el.len() as f64;
-                    }
-                }
-                c
-            })
-            .collect();
-        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-        for x in &mesh.nodes {
-            for i in 0..3 {
-                lo[i] = lo[i].min(x[i]);
-                hi[i] = hi[i].max(x[i]);
-            }
-        }
-        let axis = (0..3)
-            .max_by(|&i, &j| (hi[i] - lo[i]).total_cmp(&(hi[j] - lo[j])))
-            .unwrap_or(0);
-        let mut by_position: Vec<usize> = (0..count).collect();
-        by_position.sort_by(|&a, &b| {
-            centroids[a][axis]
-                .total_cmp(&centroids[b][axis])
-                .then(a.cmp(&b))
-        });
-        let mut side = vec![0u8; count];
-        for &e in &by_position[count / 2..] {
-            side[e] = 1;
-        }
-        // Nodes touched by each side (bit 0: first, bit 1: second).
-        let mut touched = vec![0u8; mesh.node_count()];
-        for e in 0..count {
-            for &a in mesh.element(e) {
-                touched[a] |= 1 << side[e];
-            }
-        }
-        let at_interface = |e: usize| mesh.element(e).iter().any(|&a| touched[a] == 3);
-        let (mut first, mut second) = (Vec::new(), Vec::new());
-        for e in (0..count).filter(|&e| !at_interface(e)) {
-            if side[e] == 0 {
-                first.push(e);
-            } else {
-                second.push(e);
-            }
-        }
-        let interface = colours
-            .iter()
-            .map(|c| {
-                c.iter()
-                    .copied()
-                    .filter(|&e| at_interface(e))
-                    .collect::<Vec<_>>()
-            })
-            .filter(|c| !c.is_empty())
-            .collect();
-        Self {
-            first,
-            second,
-            interface,
-        }
-    }
-
-    /// Every element, in the assembly's order.
-    fn order(&self) -> impl Iterator<Item = usize> + '_ {
-        self.first
-            .iter()
-            .chain(&self.second)
-            .chain(self.interface.iter().flatten())
-            .copied()
-    }
 }
 
 /// Meshes with fewer elements run their loops on one thread

@@ -338,6 +338,105 @@ pub(crate) fn gather_block(values: &[f64], base: usize, stride: usize) -> Block 
     ]
 }
 
+/// The small-mesh assembly order: elements `first` and `second` (each in
+/// index order) share no node, so two threads can add them up at once;
+/// the `interface` elements, which touch nodes of both, follow by colour.
+#[derive(Debug, Clone)]
+pub(crate) struct Halves {
+    pub(crate) first: Vec<usize>,
+    pub(crate) second: Vec<usize>,
+    pub(crate) interface: Vec<Vec<usize>>,
+}
+
+impl Halves {
+    /// Splits the stencils (node lists: elements, bending patches) on
+    /// nodes at `nodes`, coloured by `colours`, at the median of their
+    /// centroids along the nodes' longest extent; a stencil touching a
+    /// node that stencils of both sides touch goes to the interface.
+    pub(crate) fn of<'a>(
+        nodes: &[[f64; 3]],
+        stencils: impl Iterator<Item = &'a [usize]> + Clone,
+        colours: &[Vec<usize>],
+    ) -> Self {
+        let centroids: Vec<[f64; 3]> = stencils
+            .clone()
+            .map(|el| {
+                let mut c = [0.0; 3];
+                for &a in el {
+                    for i in 0..3 {
+                        c[i] += nodes[a][i] / el.len() as f64;
+                    }
+                }
+                c
+            })
+            .collect();
+        let count = centroids.len();
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for x in nodes {
+            for i in 0..3 {
+                lo[i] = lo[i].min(x[i]);
+                hi[i] = hi[i].max(x[i]);
+            }
+        }
+        let axis = (0..3)
+            .max_by(|&i, &j| (hi[i] - lo[i]).total_cmp(&(hi[j] - lo[j])))
+            .unwrap_or(0);
+        let mut by_position: Vec<usize> = (0..count).collect();
+        by_position.sort_by(|&a, &b| {
+            centroids[a][axis]
+                .total_cmp(&centroids[b][axis])
+                .then(a.cmp(&b))
+        });
+        let mut side = vec![0u8; count];
+        for &e in &by_position[count / 2..] {
+            side[e] = 1;
+        }
+        // Nodes touched by each side (bit 0: first, bit 1: second).
+        let mut touched = vec![0u8; nodes.len()];
+        for (e, el) in stencils.clone().enumerate() {
+            for &a in el {
+                touched[a] |= 1 << side[e];
+            }
+        }
+        let interface_flags: Vec<bool> = stencils
+            .map(|el| el.iter().any(|&a| touched[a] == 3))
+            .collect();
+        let at_interface = |e: usize| interface_flags[e];
+        let (mut first, mut second) = (Vec::new(), Vec::new());
+        for e in (0..count).filter(|&e| !at_interface(e)) {
+            if side[e] == 0 {
+                first.push(e);
+            } else {
+                second.push(e);
+            }
+        }
+        let interface = colours
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .copied()
+                    .filter(|&e| at_interface(e))
+                    .collect::<Vec<_>>()
+            })
+            .filter(|c| !c.is_empty())
+            .collect();
+        Self {
+            first,
+            second,
+            interface,
+        }
+    }
+
+    /// Every element, in the assembly's order.
+    pub(crate) fn order(&self) -> impl Iterator<Item = usize> + '_ {
+        self.first
+            .iter()
+            .chain(&self.second)
+            .chain(self.interface.iter().flatten())
+            .copied()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
