@@ -528,3 +528,47 @@ fn fabric(bending: &str) -> String {
 fn dissipative(steps: usize) -> String {
     format!("[time]\nbeta = 1.0\ngamma = 1.5\nsegments = [ {{ steps = {steps}, dt = 1.0e-3 }} ]")
 }
+
+/// Issue 46: two plies in one OBJ, the upper tilted through the lower at
+/// a shallow angle, every node–triangle and edge–edge distance far above
+/// `self_distance` (1e-6 m): the start-up check compared distances only
+/// and accepted a mesh that crosses itself in every frame. It is refused
+/// now, at `self_distance`'s line, naming a crossing edge and triangle.
+#[test]
+fn a_mesh_that_crosses_itself_is_refused_with_self_contact() {
+    let dir = std::env::temp_dir().join(format!("drape-crossing-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = dir.join("crossing.obj");
+    std::fs::write(
+        &obj,
+        "v 0 0 0\nv 0.1 0 0\nv 0.1 0.1 0\nv 0 0.1 0\n\
+         v 0.02 0.03 -0.01\nv 0.09 0.02 0.012\nv 0.08 0.09 0.011\nv 0.01 0.08 -0.012\n\
+         f 1 2 3\nf 1 3 4\nf 5 6 7\nf 5 7 8\n",
+    )
+    .unwrap();
+    let text = |contact: &str| {
+        format!(
+            "[mesh]\nshape = \"file\"\npath = {obj:?}\n{}\n[[obstacle]]\nshape = \"plane\"\npoint = [0.0, 0.0, -0.5]\nnormal = [0.0, 0.0, 1.0]\n[contact]\nmethod = \"penalty\"\npenalty = 5.0e4\n{contact}\n{}\n",
+            fabric("0.0"),
+            dissipative(2)
+        )
+    };
+    // Without self-contact the mesh is taken as it is.
+    setup(&text(""));
+    let refused = text("self = true\nself_distance = 1.0e-6");
+    let line = 1 + refused
+        .lines()
+        .position(|l| l.starts_with("self_distance"))
+        .unwrap();
+    assert_error(
+        &refused,
+        line,
+        "contact.self_distance",
+        &[
+            "passes through itself",
+            "crosses the triangle of nodes",
+            "cannot undo a crossing",
+        ],
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -413,6 +413,16 @@ pub fn segment_crosses_triangle(
 /// itself (0 for a fabric that never passes through itself). A grid of
 /// cells as large as the longest edge, as [`candidates`].
 pub fn crossings(x: &[[f64; 3]], triangles: &[[usize; 3]], edges: &[[usize; 2]]) -> usize {
+    crossing_pairs(x, triangles, edges).len()
+}
+
+/// The (edge, triangle) index pairs of [`crossings`], sorted: which edge
+/// passes through which triangle.
+pub fn crossing_pairs(
+    x: &[[f64; 3]],
+    triangles: &[[usize; 3]],
+    edges: &[[usize; 2]],
+) -> Vec<(usize, usize)> {
     let longest = edges
         .iter()
         .map(|&[a, b]| dot(sub(x[a], x[b]), sub(x[a], x[b])).sqrt())
@@ -441,7 +451,7 @@ pub fn crossings(x: &[[f64; 3]], triangles: &[[usize; 3]], edges: &[[usize; 2]])
     }
     found.sort_unstable();
     found.dedup();
-    found.len()
+    found
 }
 
 #[cfg(test)]

@@ -111,20 +111,45 @@ pub struct SelfContactSpec {
     pub stick_speed: f64,
 }
 
-/// The initial mesh already has a pair closer than `d̂`.
+/// Why self-contact cannot start from the initial mesh.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error(
-    "= {} m is larger than the distance between parts of the mesh that share no node at the start ({what}: {} m); give a smaller self_distance or a mesh whose pieces and folds are farther apart",
-    crate::human::human(*distance),
-    crate::human::human(*found)
-)]
-pub struct TooClose {
-    /// `d̂` (m).
-    pub distance: f64,
-    /// The closest such pair, in words.
-    pub what: String,
-    /// Its distance (m).
-    pub found: f64,
+pub enum TooClose {
+    /// A pair closer than `d̂`.
+    #[error(
+        "= {} m is larger than the distance between parts of the mesh that share no node at the start ({what}: {} m); give a smaller self_distance or a mesh whose pieces and folds are farther apart",
+        crate::human::human(*distance),
+        crate::human::human(*found)
+    )]
+    Distance {
+        /// `d̂` (m).
+        distance: f64,
+        /// The closest such pair, in words.
+        what: String,
+        /// Its distance (m).
+        found: f64,
+    },
+    /// The mesh already passes through itself: self-contact keeps a
+    /// fabric from crossing itself, it cannot undo a crossing (issue 46).
+    #[error(
+        "= {} m, but the mesh already passes through itself: the edge between nodes {} and {} crosses the triangle of nodes {}, {} and {} ({count} such crossing{}; nodes 0-based, as read, of the linear mesh or a higher order's sub-triangles); self-contact keeps a fabric from crossing itself and cannot undo a crossing: give a mesh whose pieces do not intersect",
+        crate::human::human(*distance),
+        edge[0],
+        edge[1],
+        triangle[0],
+        triangle[1],
+        triangle[2],
+        if *count == 1 { "" } else { "s" }
+    )]
+    Crossing {
+        /// `d̂` (m).
+        distance: f64,
+        /// The first crossing edge's nodes.
+        edge: [usize; 2],
+        /// The triangle it passes through.
+        triangle: [usize; 3],
+        /// How many (edge, triangle) pairs cross.
+        count: usize,
+    },
 }
 
 impl SelfContact {
@@ -156,8 +181,17 @@ impl SelfContact {
             stick_speed: super::DEFAULT_STICK_SPEED,
         };
         let pts = points(x);
+        let crossing = super::proximity::crossing_pairs(&pts, &s.triangles, &s.edges);
+        if let Some(&(e, k)) = crossing.first() {
+            return Err(TooClose::Crossing {
+                distance,
+                edge: s.edges[e],
+                triangle: s.triangles[k],
+                count: crossing.len(),
+            });
+        }
         if let Some((d, what)) = s.closest_pair(&pts) {
-            return Err(TooClose {
+            return Err(TooClose::Distance {
                 distance,
                 what,
                 found: d,
