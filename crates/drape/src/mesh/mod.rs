@@ -23,6 +23,7 @@ pub mod lagrange;
 pub mod obj;
 pub mod polygon;
 mod read_error;
+pub mod refine;
 mod validate;
 
 pub use read_error::{Location, MeshReadError};
