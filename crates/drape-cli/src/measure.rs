@@ -104,7 +104,8 @@ impl Run {
         let tester = DrapeTester::find(self.scenario.as_ref(), &mesh, entry.time, self.given)
             .map_err(|e| match e {
                 // What the scenario lacks is said of the scenario.
-                MeasureError::NoPedestal { .. }
+                MeasureError::NoVertical { .. }
+                | MeasureError::NoPedestal { .. }
                 | MeasureError::AmbiguousPedestal { .. }
                 | MeasureError::NotADisc { .. } => {
                     let found = if self.scenario.is_some() {

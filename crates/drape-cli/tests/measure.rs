@@ -338,6 +338,41 @@ fn a_scenario_that_is_not_a_disc_on_a_cylinder_needs_the_radii() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Writes the frame of `mesh` at `positions` as step `step` at time `time`
+/// (s) into `dir`, the collection `fields.pvd` listing it alone.
+fn frame_by_hand(
+    dir: &Path,
+    mesh: &drape::mesh::Mesh,
+    positions: &[[f64; 3]],
+    step: u64,
+    time: f64,
+) {
+    let displacement: Vec<f64> = positions
+        .iter()
+        .zip(&mesh.nodes)
+        .flat_map(|(y, x)| [y[0] - x[0], y[1] - x[1], y[2] - x[2]])
+        .collect();
+    let rel = frame_relative_path(step);
+    std::fs::create_dir_all(dir.join("fields")).unwrap();
+    let frame = Frame {
+        positions,
+        connectivity: &mesh.connectivity,
+        nodes_per_element: 3,
+        point_data: vec![DataArray {
+            name: "displacement",
+            components: 3,
+            values: Values::F64(&displacement),
+            component_names: &[],
+        }],
+        cell_data: vec![],
+        time,
+    };
+    write_vtu(&dir.join(&rel), &frame).unwrap();
+    PvdWriter::new(dir.join("fields.pvd"))
+        .push(time, &rel)
+        .unwrap();
+}
+
 /// A frame written by hand next to the drape tester's scenario: the disc
 /// hanging straight down round the pedestal, DC near 0.
 #[test]
@@ -360,30 +395,7 @@ fn a_disc_hanging_straight_down_measures_dc_near_zero() {
             }
         })
         .collect();
-    let displacement: Vec<f64> = hanging
-        .iter()
-        .zip(&mesh.nodes)
-        .flat_map(|(y, x)| [y[0] - x[0], y[1] - x[1], y[2] - x[2]])
-        .collect();
-    let rel = frame_relative_path(40);
-    std::fs::create_dir_all(dir.join("fields")).unwrap();
-    let frame = Frame {
-        positions: &hanging,
-        connectivity: &mesh.connectivity,
-        nodes_per_element: 3,
-        point_data: vec![DataArray {
-            name: "displacement",
-            components: 3,
-            values: Values::F64(&displacement),
-            component_names: &[],
-        }],
-        cell_data: vec![],
-        time: 2.5,
-    };
-    write_vtu(&dir.join(&rel), &frame).unwrap();
-    PvdWriter::new(dir.join("fields.pvd"))
-        .push(2.5, &rel)
-        .unwrap();
+    frame_by_hand(&dir, &mesh, &hanging, 40, 2.5);
     let v = measured(&[dir.to_str().unwrap()]);
     assert_eq!(v["step"], 40);
     assert_eq!(v["time"], 2.5);
@@ -391,5 +403,78 @@ fn a_disc_hanging_straight_down_measures_dc_near_zero() {
     // Between the pedestal's inscribed 54-gon (−0.13 %) and its circle (0).
     assert!((-0.002..=0.0).contains(&dc), "{dc}");
     assert_eq!(v["folds"], 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The flat disc of the drape tester (15 rings) written by hand as step 0
+/// next to `scenario`, measured: its JSON object.
+fn flat_disc_measured(name: &str, scenario: &str) -> Value {
+    let dir = scratch(name);
+    std::fs::write(dir.join("scenario.toml"), scenario).unwrap();
+    let mesh = drape::mesh::generate::disc(0.15, 15, [0.0; 3], drape::mesh::ElementOrder::Linear);
+    frame_by_hand(&dir, &mesh, &mesh.nodes, 0, 0.0);
+    let v = measured(&[dir.to_str().unwrap()]);
+    let _ = std::fs::remove_dir_all(&dir);
+    v
+}
+
+/// The DC of the flat disc of 15 rings (the inscribed 90-gon) on a
+/// pedestal of radius `r_p`, projected along a vertical tilted by `tilt`
+/// (rad) from its normal.
+fn flat_dc(r_p: f64, tilt: f64) -> f64 {
+    let pi = std::f64::consts::PI;
+    let area = 45.0 * 0.15f64.powi(2) * (std::f64::consts::TAU / 90.0).sin() * tilt.cos();
+    (area - pi * r_p * r_p) / (pi * (0.15f64.powi(2) - r_p * r_p))
+}
+
+/// Issue 46: a second surface load of 1e-6 N/m² sideways beside the
+/// drape tester's weight of 1.8816 N/m² tilts the vertical by
+/// 1e-6 / 1.8816 rad, and the flat disc measures DC 1 less its polygon's
+/// shortfall, 0 folds (the vertical was [−0.707, 0, 0.707]: refused for
+/// want of an axial cylinder, and with both radii given DC 0.524 and 2
+/// folds on a 45° plane). Loads that cancel are refused, naming the
+/// scenario.
+#[test]
+fn a_negligible_sideways_load_does_not_tilt_the_vertical() {
+    let weight = "[[load]]\nkind = \"surface\"\nforce = [0.0, 0.0, -1.8816]\n";
+    let text = example("drape-tester");
+    assert!(text.contains(weight));
+    let nudged = text.replace(
+        weight,
+        &format!("{weight}\n[[load]]\nkind = \"surface\"\nforce = [1.0e-6, 0.0, 0.0]\n"),
+    );
+    let v = flat_disc_measured("nudged", &nudged);
+    let k: Vec<f64> = v["vertical"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_f64().unwrap())
+        .collect();
+    let n = 1e-6f64.hypot(1.8816);
+    // A few roundings of unit components.
+    assert!(
+        (k[0] + 1e-6 / n).abs() < 1e-15 && k[1] == 0.0 && (k[2] - 1.8816 / n).abs() < 1e-15,
+        "{k:?}"
+    );
+    assert_eq!(v["pedestal_radius_from"], "obstacle[0]");
+    let dc = v["drape_coefficient"].as_f64().unwrap();
+    // Rounding of the area (~1e-17 m²) over π (R² − r_p²).
+    let expected = flat_dc(0.09, (1e-6f64 / 1.8816).atan());
+    assert!((dc - expected).abs() < 1e-13, "{dc} vs {expected}");
+    assert_eq!(v["folds"], 0);
+    // A lift that cancels the weight, beside the nudge: no way down.
+    let cancelled = nudged.replace(
+        weight,
+        &format!("{weight}\n[[load]]\nkind = \"surface\"\nforce = [0.0, 0.0, 1.8816]\n"),
+    );
+    let dir = scratch("cancelled");
+    std::fs::write(dir.join("scenario.toml"), &cancelled).unwrap();
+    let mesh = drape::mesh::generate::disc(0.15, 15, [0.0; 3], drape::mesh::ElementOrder::Linear);
+    frame_by_hand(&dir, &mesh, &mesh.nodes, 0, 0.0);
+    let e = refused(&[dir.to_str().unwrap()]);
+    assert!(
+        e.contains("scenario.toml") && e.contains("no vertical") && e.contains("cancel"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -695,3 +695,122 @@ fn a_wider_base_below_the_pedestal_is_not_taken_for_it() {
         "{e}"
     );
 }
+
+/// The unit vector along `v`.
+fn unit(v: [f64; 3]) -> [f64; 3] {
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    v.map(|c| c / n)
+}
+
+/// The largest difference between the components of `a` and `b`.
+fn off(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|i| (a[i] - b[i]).abs()).fold(0.0, f64::max)
+}
+
+/// The DC of the flat generated disc of `rings` rings (its inscribed
+/// `6 rings`-gon) projected along a vertical tilted by `tilt` (rad) from
+/// its normal: the area shrinks by `cos tilt`.
+fn flat_dc(rings: usize, tilt: f64, pedestal: f64) -> f64 {
+    let area = polygon_area(6 * rings, R) * tilt.cos();
+    (area - PI * pedestal * pedestal) / (PI * (R * R - pedestal * pedestal))
+}
+
+/// Issue 46: the vertical is opposite the loads' resultant weight per
+/// area — a surface load's force, a gravity load's acceleration times the
+/// mass per area `ρ t` — at full ramp, not the sum of their unit
+/// directions. A sideways surface load of 1e-6 N/m² beside the weight of
+/// 1.8816 N/m² tilts it by 1e-6 / 1.8816 rad (it tilted it by 45°, and
+/// the flat disc was refused for want of an axial cylinder, then
+/// measured on a 45° plane as DC 0.52); the flat disc measures the DC of
+/// its inscribed polygon. The tolerance 1e-15 is a few roundings of unit
+/// components.
+#[test]
+fn the_vertical_is_opposite_the_resultant_weight() {
+    let rings = 6;
+    let disc = generate::disc(R, rings, [0.0; 3], ElementOrder::Linear);
+    let find = |load: &str| {
+        DrapeTester::find(
+            Some(&scenario(DISC, CYLINDER, load)),
+            &disc,
+            0.0,
+            Given::default(),
+        )
+    };
+    let nudge =
+        format!("{WEIGHT}\n[[load]]\nkind = \"surface\"\nforce = [1.0e-6, 0.0, 0.0]\nramp = 0.5");
+    let t = find(&nudge).unwrap();
+    let k = unit([-1e-6, 0.0, 1.8816]);
+    assert!(
+        off(t.plane.vertical(), k) < 1e-15,
+        "{:?}",
+        t.plane.vertical()
+    );
+    assert_eq!(t.pedestal_source, "obstacle[0]");
+    let m = measure::measure(&surface(&disc, &disc.nodes), &t).unwrap();
+    let tilt = (1e-6f64 / 1.8816).atan();
+    // Rounding of the shadow's area (~1e-17 m²) over π (R² − r_p²).
+    assert!(
+        (m.drape_coefficient - flat_dc(rings, tilt, R_P)).abs() < 1e-13,
+        "{}",
+        m.drape_coefficient
+    );
+    assert_eq!(m.folds, 0);
+    // Gravity weighs ρ t g = 320 · 0.6e-3 · 9.81 = 1.883 52 N/m²: beside
+    // a sideways surface load of 0.02 N/m² the vertical tilts by
+    // atan(0.02 / 1.883 52) = 0.61° (within the pedestal's 1°), not by
+    // 45°.
+    let gravity = "[[load]]\nkind = \"gravity\"\nacceleration = [0.0, 0.0, -9.81]\n\
+        [[load]]\nkind = \"surface\"\nforce = [0.0, 0.02, 0.0]";
+    let t = find(gravity).unwrap();
+    let weight = 320.0 * 0.6e-3 * 9.81;
+    assert!(off(t.plane.vertical(), unit([0.0, -0.02, weight])) < 1e-15);
+    // A lift larger than the weight turns the vertical over.
+    let lifted = format!("{WEIGHT}\n[[load]]\nkind = \"surface\"\nforce = [0.0, 0.0, 3.0]");
+    let s = scenario(DISC, CYLINDER, &lifted);
+    assert_eq!(
+        drape::measure::tester::vertical_of(&s).unwrap(),
+        [0.0, 0.0, -1.0]
+    );
+    // Without a weight (a nodal load only), +z.
+    let nodal = "[[load]]\nkind = \"nodal\"\nforce = [0.0, 0.0, -0.1]\nboundary = true";
+    let s = scenario(DISC, CYLINDER, nodal);
+    assert_eq!(
+        drape::measure::tester::vertical_of(&s).unwrap(),
+        [0.0, 0.0, 1.0]
+    );
+}
+
+/// Issue 46: loads that weigh nothing — they cancel, or the fabric has no
+/// mass under gravity — leave no way down: refused, not measured on a
+/// plane the rounding of their sum chose (a weight cancelled by a lift
+/// beside a sideways 1e-6 N/m² casts the shadow sideways).
+#[test]
+fn loads_that_cancel_leave_no_vertical() {
+    let disc = generate::disc(R, 6, [0.0; 3], ElementOrder::Linear);
+    let lift = "[[load]]\nkind = \"surface\"\nforce = [0.0, 0.0, 1.8816]";
+    let nudge = "[[load]]\nkind = \"surface\"\nforce = [1.0e-6, 0.0, 0.0]";
+    let massless = {
+        let mut s = scenario(
+            DISC,
+            CYLINDER,
+            "[[load]]\nkind = \"gravity\"\nacceleration = [0.0, 0.0, -9.81]",
+        );
+        s.material.density = 0.0;
+        s
+    };
+    for s in [
+        scenario(DISC, CYLINDER, &format!("{WEIGHT}\n{lift}")),
+        scenario(DISC, CYLINDER, &format!("{WEIGHT}\n{lift}\n{nudge}")),
+        massless,
+    ] {
+        let e = DrapeTester::find(Some(&s), &disc, 0.0, Given::default()).unwrap_err();
+        assert!(matches!(e, MeasureError::NoVertical { .. }), "{e}");
+        let e = e.to_string();
+        assert!(
+            e.contains("no vertical")
+                && e.contains("surface and gravity loads")
+                && e.contains("which way is down"),
+            "{e}"
+        );
+    }
+}

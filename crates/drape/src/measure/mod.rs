@@ -26,7 +26,7 @@
 //! - [`folds`]: the outline's radius as a function of the angle round the
 //!   shadow's centroid, smoothed, and its prominent maxima counted;
 //! - [`tester`]: the geometry of the instrument — the vertical (opposite
-//!   the scenario's weight), the pedestal's axis and radius (a cylinder
+//!   the scenario's resultant weight), the pedestal's axis and radius (a cylinder
 //!   obstacle under the specimen) and the specimen's radius (a `disc`
 //!   mesh, or a file mesh whose initial rim is a circle) — found from the
 //!   scenario or given.
@@ -296,6 +296,13 @@ pub enum MeasureError {
         obstacles: [usize; 2],
         /// Their radii (m).
         radii: [f64; 2],
+    },
+    /// The scenario's weight gives no direction: its loads weigh nothing,
+    /// or cancel ([`tester::vertical_of`]).
+    #[error("no vertical: {reason}, and which way is down cannot be told")]
+    NoVertical {
+        /// Why not.
+        reason: String,
     },
     /// The vertical cannot be a direction.
     #[error("the vertical {vertical:?} is not a direction")]

@@ -2,9 +2,15 @@
 //! stands and how large it and the specimen are — found from the
 //! scenario, or given.
 //!
-//! - **Vertical**: opposite the scenario's weight, `k = −Σ f_i / |f_i|`
-//!   over its `surface` and `gravity` loads; `+z` without them (or without
-//!   a scenario).
+//! - **Vertical**: opposite the scenario's weight, the resultant of its
+//!   `surface` and `gravity` loads per unit area at full ramp,
+//!   `k = −w / |w|` with `w = Σ q_i + Σ ρ t g_j` (a surface load's force
+//!   per area `q_i`, a gravity load's acceleration `g_j` times the mass
+//!   per area `ρ t`): a negligible load tilts it negligibly. `+z` without
+//!   such loads (or without a scenario). Loads that weigh nothing, or whose
+//!   resultant is at most [`CANCEL_TOLERANCE`] of the sum of their sizes
+//!   (they cancel, and the direction left is their rounding's), leave no
+//!   vertical: an error.
 //! - **Pedestal**: an `[[obstacle]]` of shape `cylinder` whose axis is
 //!   vertical (within [`VERTICAL_TOLERANCE_DEGREES`]) and passes under the
 //!   specimen (within the initial rim's reach of its centre), moved by its
@@ -39,6 +45,14 @@ pub const VERTICAL_TOLERANCE_DEGREES: f64 = 1.0;
 /// largest, for a file mesh to be a disc: 2 % (the mid-edge nodes of a T6
 /// on the chords of a 60-gon lie 0.14 % inside the circle).
 pub const RIM_TOLERANCE: f64 = 0.02;
+
+/// Largest resultant of the scenario's weights, as a fraction of the sum
+/// of their sizes, that counts as none: 1e-6. Below it the loads cancel
+/// to about the digits a scenario gives them with, and what is left
+/// points wherever those last digits do (a weight of 1.8816 N/m² lifted
+/// by 1.8816 N/m² beside a sideways 1e-6 N/m² leaves 2.7e-7 of 3.76 N/m²,
+/// all of it sideways).
+pub const CANCEL_TOLERANCE: f64 = 1e-6;
 
 /// Tops of two cylinders closer than this fraction of the specimen's
 /// reach are at one height.
@@ -119,9 +133,10 @@ impl DrapeTester {
     /// documentation).
     ///
     /// # Errors
-    /// [`MeasureError::NoPedestal`], [`MeasureError::AmbiguousPedestal`]
-    /// and [`MeasureError::NotADisc`] saying why a radius that was not
-    /// given cannot be found; those of
+    /// [`MeasureError::NoVertical`] for a scenario whose loads weigh
+    /// nothing ([`vertical_of`]); [`MeasureError::NoPedestal`],
+    /// [`MeasureError::AmbiguousPedestal`] and [`MeasureError::NotADisc`]
+    /// saying why a radius that was not given cannot be found; those of
     /// [`DrapeTester::new`].
     pub fn find(
         scenario: Option<&Scenario>,
@@ -129,7 +144,10 @@ impl DrapeTester {
         time: f64,
         given: Given,
     ) -> Result<Self, MeasureError> {
-        let vertical = scenario.map_or([0.0, 0.0, 1.0], vertical_of);
+        let vertical = match scenario {
+            Some(s) => vertical_of(s)?,
+            None => [0.0, 0.0, 1.0],
+        };
         let up = Horizontal::new([0.0; 3], vertical).ok_or(MeasureError::Vertical { vertical })?;
         let rim: Vec<[f64; 3]> = initial
             .boundary_nodes()
@@ -170,29 +188,65 @@ impl DrapeTester {
     }
 }
 
-/// The scenario's vertical: `−Σ f_i / |f_i|` over its `surface` and
-/// `gravity` loads (their force or acceleration), `+z` if there are none
-/// or they cancel.
-pub fn vertical_of(scenario: &Scenario) -> [f64; 3] {
-    let mut down = [0.0; 3];
-    for load in &scenario.loads {
-        if !matches!(load.kind, LoadKindSpec::Surface | LoadKindSpec::Gravity) {
-            continue;
-        }
-        if let Some(f) = load.force.or(load.acceleration) {
-            let length = vec3::norm(f);
-            if length.is_finite() && length > 0.0 {
-                down = vec3::add(down, vec3::scale(f, 1.0 / length));
-            }
-        }
+/// The scenario's vertical, opposite its weight per unit area at full
+/// ramp: `k = −w / |w|`, `w = Σ q_i + Σ ρ t g_j` over its `surface` loads
+/// (force per area `q_i`, N/m²) and `gravity` loads (acceleration `g_j`,
+/// m/s², times the mass per area `ρ t`, kg/m²); `+z` if it has no such
+/// load.
+///
+/// # Errors
+/// [`MeasureError::NoVertical`] where `w` is not finite, or
+/// `|w| <= CANCEL_TOLERANCE · Σ |w_i|` (the loads weigh nothing or cancel).
+pub fn vertical_of(scenario: &Scenario) -> Result<[f64; 3], MeasureError> {
+    let mass_per_area = scenario.material.density * scenario.material.thickness;
+    let weights: Vec<[f64; 3]> = scenario
+        .loads
+        .iter()
+        .filter_map(|load| match load.kind {
+            LoadKindSpec::Surface => load.force,
+            LoadKindSpec::Gravity => load
+                .force
+                .or(load.acceleration)
+                .map(|g| vec3::scale(g, mass_per_area)),
+            LoadKindSpec::Pressure | LoadKindSpec::Nodal => None,
+        })
+        .collect();
+    if weights.is_empty() {
+        return Ok([0.0, 0.0, 1.0]);
     }
-    let length = vec3::norm(down);
-    if length > 1e-12 {
-        // (+ 0.0: no negative zeros in the report.)
-        down.map(|c| -c / length + 0.0)
-    } else {
-        [0.0, 0.0, 1.0]
+    let w = weights.iter().fold([0.0; 3], |s, &w| vec3::add(s, w));
+    let sizes: f64 = weights.iter().map(|&w| vec3::norm(w)).sum();
+    let length = vec3::norm(w);
+    let no_vertical = |reason: String| MeasureError::NoVertical { reason };
+    if !(length.is_finite() && sizes.is_finite()) {
+        return Err(no_vertical(format!(
+            "the scenario's surface and gravity loads add up to {} N/m², not a finite weight",
+            human_point(w)
+        )));
     }
+    if sizes == 0.0 {
+        return Err(no_vertical(format!(
+            "the scenario's surface and gravity loads weigh nothing (a gravity load weighs its acceleration times the mass per area ρ t, here {} kg/m²)",
+            human(mass_per_area)
+        )));
+    }
+    if length <= CANCEL_TOLERANCE * sizes {
+        let part = if length == 0.0 {
+            String::new()
+        } else {
+            format!(
+                ", {:.1e} of the sum of their sizes {} N/m² ({CANCEL_TOLERANCE:e} or less counts as none)",
+                length / sizes,
+                human(sizes)
+            )
+        };
+        return Err(no_vertical(format!(
+            "the scenario's surface and gravity loads cancel: they add up to {} N/m²{part}",
+            human_point(w)
+        )));
+    }
+    // (+ 0.0: no negative zeros in the report.)
+    Ok(w.map(|c| -c / length + 0.0))
 }
 
 /// The pedestal found in a scenario.
