@@ -418,6 +418,15 @@ fn flat_disc_measured(name: &str, scenario: &str) -> Value {
     v
 }
 
+/// The numbers of a JSON array.
+fn floats(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_f64().unwrap())
+        .collect()
+}
+
 /// The DC of the flat disc of 15 rings (the inscribed 90-gon) on a
 /// pedestal of radius `r_p`, projected along a vertical tilted by `tilt`
 /// (rad) from its normal.
@@ -444,12 +453,7 @@ fn a_negligible_sideways_load_does_not_tilt_the_vertical() {
         &format!("{weight}\n[[load]]\nkind = \"surface\"\nforce = [1.0e-6, 0.0, 0.0]\n"),
     );
     let v = flat_disc_measured("nudged", &nudged);
-    let k: Vec<f64> = v["vertical"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|c| c.as_f64().unwrap())
-        .collect();
+    let k = floats(&v["vertical"]);
     let n = 1e-6f64.hypot(1.8816);
     // A few roundings of unit components.
     assert!(
@@ -477,4 +481,33 @@ fn a_negligible_sideways_load_does_not_tilt_the_vertical() {
         "{e}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 46: the drape tester's 9 cm pedestal given with its axis down
+/// (`center` at its bottom face, 20 cm under the specimen; its top face
+/// `center − height · axis` at the specimen) over a 12 cm stand whose top
+/// is 10 cm under the specimen: the pedestal is measured on, not the
+/// stand (r_p was 0.12, DC 0.955 instead of 0.975), about the centre of
+/// its top face.
+#[test]
+fn a_pedestal_given_axis_down_is_ranked_by_its_top_face() {
+    let pedestal = "center = [0.0, 0.0, 2.0e-6]   # centre of the top face: 2 um into the specimen\naxis = [0.0, 0.0, 1.0]\nradius = 0.09\nheight = 0.2\n";
+    let text = without_top_disc(&example("drape-tester"));
+    assert!(text.contains(pedestal));
+    let flipped = text.replace(
+        pedestal,
+        "center = [0.0, 0.0, -0.199998]\naxis = [0.0, 0.0, -1.0]\nradius = 0.09\nheight = 0.2\n\n\
+         [[obstacle]]\nshape = \"cylinder\"\ncenter = [0.0, 0.0, -0.1]\naxis = [0.0, 0.0, 1.0]\nradius = 0.12\nheight = 0.1\n",
+    );
+    let v = flat_disc_measured("flipped", &flipped);
+    assert_eq!(v["pedestal_radius"], 0.09);
+    assert_eq!(v["pedestal_radius_from"], "obstacle[0]");
+    let c = floats(&v["center"]);
+    // −0.199998 + 0.2, to rounding.
+    assert!(
+        c[0] == 0.0 && c[1] == 0.0 && (c[2] - 2e-6).abs() < 1e-16,
+        "{c:?}"
+    );
+    let dc = v["drape_coefficient"].as_f64().unwrap();
+    assert!((dc - flat_dc(0.09, 0.0)).abs() < 1e-13, "{dc}");
 }

@@ -814,3 +814,52 @@ fn loads_that_cancel_leave_no_vertical() {
         );
     }
 }
+
+/// Issue 46: the pedestal is the cylinder whose highest face is highest,
+/// whichever way its axis points. The 9 cm pedestal given with its axis
+/// down (`center` then the centre of its bottom face, 20 cm under the
+/// specimen; its top face at `center − height · axis`, under the
+/// specimen) over a 12 cm stand whose top is 10 cm under the specimen:
+/// the pedestal, not the stand (the stand was taken, its `center` the
+/// higher), and the plane is taken about the centre of its top face.
+#[test]
+fn the_pedestal_is_ranked_by_its_highest_face() {
+    let rings = 6;
+    let disc = generate::disc(R, rings, [0.0; 3], ElementOrder::Linear);
+    let stand = "[[obstacle]]\nshape = \"cylinder\"\ncenter = [0.0, 0.0, -0.1]\naxis = [0.0, 0.0, 1.0]\nradius = 0.12\nheight = 0.1";
+    let down = "[[obstacle]]\nshape = \"cylinder\"\ncenter = [0.0, 0.0, -0.2]\naxis = [0.0, 0.0, -2.0]\nradius = 0.09\nheight = 0.2";
+    for (obstacles, index) in [
+        (format!("{stand}\n{down}"), 1),
+        (format!("{down}\n{stand}"), 0),
+    ] {
+        let t = DrapeTester::find(
+            Some(&scenario(DISC, &obstacles, WEIGHT)),
+            &disc,
+            0.0,
+            Given::default(),
+        )
+        .unwrap();
+        assert_eq!(t.pedestal_source, format!("obstacle[{index}]"));
+        assert_eq!(t.pedestal_radius, R_P);
+        // −0.2 − 0.2 · (−1): the top face, at the specimen's plane.
+        assert!(
+            off(t.plane.origin(), [0.0; 3]) < 1e-15,
+            "{:?}",
+            t.plane.origin()
+        );
+        let m = measure::measure(&surface(&disc, &disc.nodes), &t).unwrap();
+        assert!((m.drape_coefficient - flat_dc(rings, 0.0, R_P)).abs() < 1e-13);
+    }
+    // A top disc given with its axis down (its `center` on the specimen's
+    // plane, its top face 2 cm above it) is above the specimen, not under
+    // it: not the pedestal, though its `center` is the highest.
+    let top_disc = "[[obstacle]]\nshape = \"cylinder\"\ncenter = [0.0, 0.0, -2.0e-6]\naxis = [0.0, 0.0, -1.0]\nradius = 0.09\nheight = 0.020002";
+    let t = DrapeTester::find(
+        Some(&scenario(DISC, &format!("{top_disc}\n{CYLINDER}"), WEIGHT)),
+        &disc,
+        0.0,
+        Given::default(),
+    )
+    .unwrap();
+    assert_eq!(t.pedestal_source, "obstacle[1]");
+}

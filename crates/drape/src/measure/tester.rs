@@ -17,12 +17,16 @@
 //!   velocity to the frame's time; of several, the one whose top face is
 //!   highest — the one the specimen comes to rest on (a wider base
 //!   cylinder below the pedestal is not it, whatever its place in the
-//!   list). A cylinder whose top face is above the specimen's initial
-//!   plane (beyond [`ABOVE_TOLERANCE`] of the rim's reach) is not under
-//!   it: the top disc that grips the specimen on the pedestal, as in the
-//!   instrument. Two under the specimen with their tops at one height and
-//!   different radii are ambiguous: an error that asks for the radius.
-//!   Its radius is `r_p`, its axis the centre of the measurement.
+//!   list). Its top face is the higher of its two faces along the
+//!   vertical, whichever way its axis points: `center` for an axis up,
+//!   `center − height · axis` for an axis down (the scenario's `center` is
+//!   the face the axis points out of). A cylinder whose top face is above
+//!   the specimen's initial plane (beyond [`ABOVE_TOLERANCE`] of the rim's
+//!   reach) is not under it: the top disc that grips the specimen on the
+//!   pedestal, as in the instrument. Two under the specimen with their
+//!   tops at one height and different radii are ambiguous: an error that
+//!   asks for the radius. Its radius is `r_p`, the centre of its top face
+//!   the centre of the measurement.
 //! - **Specimen**: the `radius` of a `[mesh] shape = "disc"` (which must
 //!   then lie in a horizontal plane); for `shape = "file"` the initial
 //!   mesh's rim, whose nodes must all lie within [`RIM_TOLERANCE`] of one
@@ -253,15 +257,15 @@ pub fn vertical_of(scenario: &Scenario) -> Result<[f64; 3], MeasureError> {
 struct Pedestal {
     /// Its index among the `[[obstacle]]` tables.
     index: usize,
-    /// A point on its axis at the frame's time (m).
+    /// The centre of its top face at the frame's time (m).
     axis_point: [f64; 3],
     /// Its radius (m).
     radius: f64,
 }
 
 /// The vertical cylinder under the specimen (its axis within `reach` of
-/// `rim_center`) whose top is highest (the nearest axis of equal tops and
-/// radii); or why there is none ([`MeasureError::NoPedestal`]), or why
+/// `rim_center`) whose top face is highest along the vertical (the
+/// nearest axis of equal tops and radii); or why there is none ([`MeasureError::NoPedestal`]), or why
 /// the choice is ambiguous ([`MeasureError::AmbiguousPedestal`]).
 fn find_pedestal(
     scenario: &Scenario,
@@ -292,15 +296,23 @@ fn find_pedestal(
         if distance > reach {
             continue;
         }
-        // The top face's height (`center` is the top face's centre).
-        let top = vec3::dot(moved, up.vertical());
+        // `center` is the face the axis points out of, the other face
+        // `height` back along the axis: the top face is the higher of the
+        // two along the vertical, the other one for an axis pointing down.
+        let other = vec3::sub(moved, vec3::scale(c.axis, c.height / length));
+        let top_face = if vec3::dot(other, up.vertical()) > vec3::dot(moved, up.vertical()) {
+            other
+        } else {
+            moved
+        };
+        let top = vec3::dot(top_face, up.vertical());
         if top > vec3::dot(rim_center, up.vertical()) + ABOVE_TOLERANCE * reach {
             // Above the specimen: a top disc.
             continue;
         }
         let pedestal = Pedestal {
             index,
-            axis_point: moved,
+            axis_point: top_face,
             radius: c.radius,
         };
         best = match best {
