@@ -271,14 +271,35 @@ pub(crate) struct StepTerms<'a> {
     /// Time at the end of the step (obstacle positions).
     pub time: f64,
     /// The positions at the step's start and its size (s), for the terms
-    /// that lag over the step (friction); `None` in statics.
+    /// that lag over the step (friction); in statics the load increment's
+    /// start and size. `None`: no friction.
     pub start: Option<(&'a [f64], f64)>,
+    /// Where friction lags its normal force from.
+    pub friction: FrictionLag<'a>,
+}
+
+/// Where a step's friction takes its normal forces and tangent planes
+/// from (`terms::friction`'s module docs); the slip is always measured
+/// from the step's start.
+#[derive(Clone, Copy)]
+pub(crate) enum FrictionLag<'a> {
+    /// The step's start (a dynamic step).
+    Start,
+    /// A static increment's first round: the nodes touching an obstacle
+    /// at the start stick ([`FrictionTerm::stick`]); friction between the
+    /// layers lags from the start.
+    Stick,
+    /// A static increment's later rounds: these positions, at the end of
+    /// the increment, with this contact state (the previous round's
+    /// solution; none without obstacles).
+    At(&'a [f64], Option<&'a ContactState>),
 }
 
 /// The terms of a step's incremental potential, in their order: membrane,
 /// bending (with a bending stiffness), loads, inertia (dynamic), penalty contact (with obstacles and
-/// penalties), friction (a friction coefficient, either contact method, in
-/// a dynamic step: lagged from `state`, the step's start's contact state).
+/// penalties), friction (a friction coefficient, either contact method:
+/// lagged from `state`, the step's start's contact state, or as
+/// `terms.friction` says in a static round).
 /// `f_ext` receives the external forces, `my` is scratch.
 fn step_potential<'a>(
     model: &'a Model,
@@ -315,17 +336,20 @@ fn step_potential<'a>(
             )));
         }
         // Friction lags the normal force and the tangent plane of the
-        // step's start (the contact state is the step's start's too).
+        // step's start (the contact state is the step's start's too), or
+        // in a static round where `terms.friction` says.
         if contact.has_friction()
             && let (Some((start, dt)), Some(state)) = (terms.start, state)
         {
-            let lag = (start, terms.time - dt, dt);
-            list.push(Box::new(FrictionTerm::new(
-                contact,
-                model.pattern(),
-                lag,
-                state,
-            )));
+            let (pattern, t0) = (model.pattern(), terms.time - dt);
+            list.push(Box::new(match terms.friction {
+                FrictionLag::Start => FrictionTerm::new(contact, pattern, (start, t0, dt), state),
+                FrictionLag::Stick => FrictionTerm::stick(contact, pattern, (start, t0, dt), state),
+                FrictionLag::At(at, lag) => {
+                    let lag = lag.unwrap_or(state);
+                    FrictionTerm::lagged_at(contact, pattern, (at, terms.time), (start, dt), lag)
+                }
+            }));
         }
     }
     if let Some(self_contact) = model.self_contact()
@@ -333,10 +357,15 @@ fn step_potential<'a>(
         && self_contact.friction() > 0.0
     {
         // Friction between the layers: `[contact] friction`, lagged from
-        // the step's start (dynamic steps only, as against obstacles).
-        list.push(Box::new(SelfFrictionTerm::new(
+        // the step's start, or a static round's lag as against obstacles.
+        let at = match terms.friction {
+            FrictionLag::At(at, _) => at,
+            FrictionLag::Start | FrictionLag::Stick => start,
+        };
+        list.push(Box::new(SelfFrictionTerm::lagged_at(
             self_contact,
             model.pattern(),
+            at,
             (start, dt),
             !grown,
         )));
@@ -446,19 +475,7 @@ pub(crate) fn solve_step(
             Ok(r) => r,
             Err(e) => break e,
         };
-        total = Some(match total {
-            None => report,
-            Some(mut t) => {
-                t.iterations += report.iterations;
-                t.chord_steps += report.chord_steps;
-                t.residuals.extend(report.residuals);
-                t.increments.extend(report.increments);
-                t.factorization = report.factorization.or(t.factorization);
-                t.shifts += report.shifts;
-                t.projections += report.projections;
-                t
-            }
-        });
+        total = Some(merge_reports(total, report));
         let (Some(cm), Some(state)) = (model.contact(), contact.as_mut()) else {
             if let Some(e) = unstable(model, y) {
                 break e;
@@ -514,6 +531,24 @@ fn unstable(model: &Model, y: &[f64]) -> Option<NewtonError> {
     }
     let (stretch, element) = model.min_stretch(y);
     (stretch < CRITICAL_STRETCH).then_some(NewtonError::MaterialInstability { element, stretch })
+}
+
+/// Newton's reports of two solves of one step, as one: `report` after
+/// `total` (none: `report` alone).
+fn merge_reports(total: Option<NewtonReport>, report: NewtonReport) -> NewtonReport {
+    match total {
+        None => report,
+        Some(mut t) => {
+            t.iterations += report.iterations;
+            t.chord_steps += report.chord_steps;
+            t.residuals.extend(report.residuals);
+            t.increments.extend(report.increments);
+            t.factorization = report.factorization.or(t.factorization);
+            t.shifts += report.shifts;
+            t.projections += report.projections;
+            t
+        }
+    }
 }
 
 fn empty_report() -> NewtonReport {

@@ -32,7 +32,7 @@
 //! figures). Free fall and smooth motion keep `rho = 1`. The converged
 //! steps are the same as with `rho = 1` to the Newton tolerance.
 
-use super::{State, StepTerms, solve_step};
+use super::{FrictionLag, State, StepTerms, solve_step};
 use crate::model::Model;
 use crate::solver::newton::{NewtonError, NewtonReport, NewtonSettings, NewtonWorkspace};
 
@@ -69,6 +69,12 @@ pub struct DynamicWorkspace {
     /// The Hessian's layout grown with self-contact's pairs, once a step
     /// has needed it (`integrator::grown`).
     pub(crate) grown: Option<super::grown::Grown>,
+    /// A static round's lag: the previous round's solution (empty until
+    /// a static increment with friction needs it).
+    pub(crate) lag: Vec<f64>,
+    /// Why the last static increment failed, when friction could not
+    /// hold its load (`integrator::statics`).
+    pub(crate) friction_shortfall: Option<super::statics::FrictionShortfall>,
 }
 
 impl DynamicWorkspace {
@@ -95,6 +101,12 @@ impl DynamicWorkspace {
         stencils: &[[usize; 4]],
     ) -> Result<(), crate::solver::LinearSolveError> {
         super::grown::restore(model, &mut self.grown, &mut self.newton, stencils)
+    }
+
+    /// When the last static increment failed because friction could not
+    /// hold its load: the forces compared (`integrator::statics`).
+    pub fn friction_shortfall(&self) -> Option<super::statics::FrictionShortfall> {
+        self.friction_shortfall
     }
 
     /// Buffers for `model`, with direct linear solves.
@@ -126,6 +138,8 @@ impl DynamicWorkspace {
             y: vec![0.0; n],
             newton: NewtonWorkspace::new(n, model.pattern().nnz(), linear),
             grown: None,
+            lag: Vec::new(),
+            friction_shortfall: None,
         })
     }
 }
@@ -200,6 +214,7 @@ impl Newmark {
             pressure: model.pressure_at(t1, None),
             time: t1,
             start: Some((&state.positions, dt)),
+            friction: FrictionLag::Start,
         };
         let settings = &NewtonSettings {
             dt: Some(dt),

@@ -34,6 +34,7 @@ mod start;
 mod summary;
 mod warnings;
 use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
+use crate::integrator::statics::FrictionShortfall;
 use crate::integrator::{State, StaticStepper, StepEnergies};
 use crate::model::Model;
 use crate::output::atomic::write_atomic;
@@ -96,15 +97,17 @@ pub enum RunError {
     },
     /// A step failed even at the smallest step size.
     #[error(
-        "step {} from t = {time:.6e} s failed at dt = {dt:.3e} s after {cutbacks} cut-backs: {cause}{hint}. The last converged state is in {out}", step + 1
+        "{} after {cutbacks} cut-backs: {cause}{hint}. The last converged state is in {out}", which_step(*.step, *.time, *.dt, *.statics)
     )]
     Step {
         /// Converged steps before the failure.
         step: usize,
-        /// Time of the last converged state (s).
+        /// Time of the last converged state (s), or its load factor.
         time: f64,
-        /// Smallest step size tried (s).
+        /// Smallest step size tried (s), or load increment.
         dt: f64,
+        /// Whether the step was a static analysis's load increment.
+        statics: bool,
         /// Halvings tried.
         cutbacks: usize,
         /// Newton's error.
@@ -154,6 +157,23 @@ pub enum RunError {
         /// Why the summary could not be written.
         error: std::io::Error,
     },
+}
+
+/// The step that failed, in the words of its analysis: a dynamic step
+/// by its time and size, a static increment by its load factors.
+fn which_step(step: usize, time: f64, dt: f64, statics: bool) -> String {
+    if statics {
+        format!(
+            "load increment {} from load factor {time:.6} failed at an increment of {dt:.3e} (to load factor {:.6})",
+            step + 1,
+            time + dt
+        )
+    } else {
+        format!(
+            "step {} from t = {time:.6e} s failed at dt = {dt:.3e} s",
+            step + 1
+        )
+    }
 }
 
 impl RunError {
@@ -689,20 +709,18 @@ impl Stepper<'_, '_> {
                 out: self.out.to_path_buf(),
             };
         }
+        let statics = matches!(self.setup.analysis, Analysis::Static { .. });
         RunError::Step {
             step: self.counters.step,
             time: self.state.time,
             dt: h,
+            statics,
             cutbacks,
             cause,
-            hint: if !matches!(self.setup.analysis, Analysis::Static { .. }) {
-                String::new()
-            } else if self.setup.model.bending().is_some() {
-                // A fabric with bending has stiffness across its plane;
-                // what stalls is the loading path through its buckling.
-                "; a static settle of a fabric with bending follows one loading path through its folds, and Newton stalled on it: give it more increments ([analysis] steps), a looser increment test ([solver] tolerance) where the residual is already small (a specimen held by friction alone), or run it dynamically to rest (beta = 1, gamma = 1.5)".into()
+            hint: if statics {
+                static_hint(&self.setup.model, self.ws.friction_shortfall())
             } else {
-                "; a static analysis needs a membrane in tension from the first increment on (prestress, or supports that stretch it): a slack membrane has no stiffness across its plane, so run it dynamically to rest instead (beta = 1, gamma = 1.5)".into()
+                String::new()
             },
             out: self.out.to_path_buf(),
         }
@@ -817,6 +835,42 @@ fn setup_failure(setup: &Setup, out: &Path, start: Instant, error: SetupError) -
         Ok(()) => RunError::Setup(error),
         Err(e) => e,
     }
+}
+
+/// The advice on a static increment that failed (starts with "; "): what
+/// stopped it, from what the model has.
+fn static_hint(model: &Model, shortfall: Option<FrictionShortfall>) -> String {
+    if let Some(FrictionShortfall { needed, limit }) = shortfall {
+        // The increment stuck, and Coulomb's limit let it go.
+        return format!(
+            "; friction cannot hold the load: with the nodes in contact sticking, the load increment is in equilibrium with {needed:.3e} N of tangential force on them, and Coulomb's limit mu lambda there is {limit:.3e} N; a static analysis has no equilibrium where the fabric slides (run it dynamically to follow the slide), or give the contact more friction",
+        );
+    }
+    if model.bending().is_some() {
+        // A fabric with bending has stiffness across its plane; what
+        // stalls is the loading path through its buckling.
+        return "; a static settle of a fabric with bending follows one loading path through its folds, and Newton stalled on it: give it more increments ([analysis] steps), a looser increment test ([solver] tolerance) where the residual is already small (a specimen held by friction alone), or run it dynamically to rest (beta = 1, gamma = 1.5)".into();
+    }
+    if model.section().prestress > 0.0 && model.fixed_count() == 0 {
+        // Tensioned, but free to move as a whole: its rigid motions have
+        // no stiffness.
+        let contact = match model.contact() {
+            None => "and no obstacle touches it",
+            Some(c) if !c.has_friction() => {
+                "and frictionless contact pushes only along the obstacles' normals, so a load along them has nothing to balance it"
+            }
+            Some(_) => {
+                "and friction holds only the nodes that touch an obstacle at an increment's start"
+            }
+        };
+        return format!(
+            "; the membrane is prestressed, but nothing holds its rigid motions: no [[fix]] holds a node, {contact}; hold it with supports or friction, or run it dynamically"
+        );
+    }
+    if model.section().prestress > 0.0 {
+        return String::new();
+    }
+    "; a static analysis needs a membrane in tension from the first increment on (prestress, or supports that stretch it): a slack membrane has no stiffness across its plane, so run it dynamically to rest instead (beta = 1, gamma = 1.5)".into()
 }
 
 fn advance(

@@ -40,6 +40,27 @@
 //! start) makes `D` a potential of the step, so the line search and the
 //! projected Newton apply. The work friction does against the slip over
 //! the step, `mu lambda f1(s) s` a node, is the energy it dissipates.
+//!
+//! A static load increment (`integrator::statics`) is the step from the
+//! increment's start, its load factor standing for the time (so `h` is
+//! the increment and the smoothing slip `eps_v h`), and lags the normal
+//! force in rounds — the lagged iterations of Li et al. 2020, §5: a
+//! first round in which the nodes touching an obstacle at the start
+//! stick ([`FrictionTerm::stick`]), then rounds whose normal force and
+//! tangent plane are the previous round's solution's
+//! ([`FrictionTerm::lagged_at`]), the slip still measured from the
+//! increment's start. Sticking, a node is held by a spring along the
+//! tangent plane:
+//!
+//! ```text
+//! S(Y)      = sum_p 1/2 k_p |u_p|^2,  dS/dy_p = k_p u_p,  d2S/dy_p2 = k_p T_p
+//! k_p       = eta                   penalty: the contact's own stiffness
+//!           = 2 mu lambda_p / e     multipliers: Coulomb's at no slip
+//! ```
+//!
+//! which dissipates nothing: it only finds the normal forces the load
+//! increment brings, which a normal force lagged from the start lacks
+//! (from an unloaded start it has none).
 
 use super::super::potential::{Stencils, StepContext, StepTerm, TermValue};
 use crate::contact::{ContactMethod, ContactModel, ContactState, mollifier};
@@ -49,7 +70,7 @@ use crate::solver::SparsePattern;
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Lagged {
     node: usize,
-    /// `mu lambda` (N).
+    /// `mu lambda` (N); sticking, the spring's stiffness `k` (N/m).
     force: f64,
     /// The unit normal at the start.
     normal: [f64; 3],
@@ -58,10 +79,20 @@ struct Lagged {
     anchor: [f64; 3],
 }
 
+/// What the pairs' `force` stands for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Law {
+    /// Coulomb's smoothed friction, `force` = `mu lambda`.
+    Coulomb,
+    /// Sticking (a static increment's first round), `force` = `k`.
+    Stick,
+}
+
 /// The friction potential of a step.
 pub struct FrictionTerm<'a> {
     pattern: &'a SparsePattern,
     pairs: Vec<Lagged>,
+    law: Law,
     /// `eps_v h` (m): the slip below which friction is viscous.
     smooth: f64,
     /// Dissipation at the last evaluation (J).
@@ -79,6 +110,21 @@ impl<'a> FrictionTerm<'a> {
         (start, t0, dt): (&[f64], f64, f64),
         state: &ContactState,
     ) -> Self {
+        Self::lagged_at(contact, pattern, (start, t0), (start, dt), state)
+    }
+
+    /// The friction of `contact` over the step of size `dt` from positions
+    /// `start`, its normal forces and tangent planes lagged at positions
+    /// `at`, time `t`, whose contact state is `state` (a static round's:
+    /// the previous round's solution, module docs); the slip measured
+    /// from `start`.
+    pub fn lagged_at(
+        contact: &ContactModel,
+        pattern: &'a SparsePattern,
+        (at, t): (&[f64], f64),
+        (start, dt): (&[f64], f64),
+        state: &ContactState,
+    ) -> Self {
         let lagged = |p: usize, k: usize, lambda: f64, normal: [f64; 3]| {
             let v = contact.bodies[k].velocity;
             Lagged {
@@ -90,7 +136,7 @@ impl<'a> FrictionTerm<'a> {
         };
         let pairs = match contact.method {
             ContactMethod::Penalty { stiffness } => {
-                let (near, _) = contact.near_pairs(start, t0, state, 0.0, false);
+                let (near, _) = contact.near_pairs(at, t, state, 0.0, false);
                 near.into_iter()
                     .filter(|&(_, k, _)| contact.friction_of(k) > 0.0)
                     .map(|(p, k, prox)| lagged(p, k, stiffness * (-prox.gap), prox.normal))
@@ -101,8 +147,8 @@ impl<'a> FrictionTerm<'a> {
                     let (k, face) = (*held)?;
                     let (k, lambda) = (k as usize, state.multipliers[p]);
                     (contact.friction_of(k) > 0.0 && lambda > 0.0).then(|| {
-                        let x = [start[3 * p], start[3 * p + 1], start[3 * p + 2]];
-                        let (prox, _) = contact.bodies[k].constraint(x, t0, face);
+                        let x = [at[3 * p], at[3 * p + 1], at[3 * p + 2]];
+                        let (prox, _) = contact.bodies[k].constraint(x, t, face);
                         lagged(p, k, lambda, prox.normal)
                     })
                 })
@@ -111,9 +157,90 @@ impl<'a> FrictionTerm<'a> {
         Self {
             pattern,
             pairs,
+            law: Law::Coulomb,
             smooth: contact.stick_speed * dt,
             dissipated: 0.0,
         }
+    }
+
+    /// A static increment's first round (module docs): over the increment
+    /// `dt` from positions `start` at load factor `t0`, whose contact state
+    /// is `state`, every node touching an obstacle with friction — a
+    /// penalty node closer than the smoothing slip `eps_v dt`, a node of
+    /// the multipliers' active set pressed by its multiplier — sticks, held
+    /// along the tangent plane by a spring (`eta`, or `2 mu lambda / e`).
+    pub fn stick(
+        contact: &ContactModel,
+        pattern: &'a SparsePattern,
+        (start, t0, dt): (&[f64], f64, f64),
+        state: &ContactState,
+    ) -> Self {
+        let smooth = contact.stick_speed * dt;
+        let mut term = match contact.method {
+            ContactMethod::Penalty { stiffness } => {
+                let (near, _) = contact.near_pairs(start, t0, state, smooth, false);
+                let pairs = near
+                    .into_iter()
+                    .filter(|&(_, k, _)| contact.friction_of(k) > 0.0)
+                    .map(|(p, k, prox)| {
+                        let v = contact.bodies[k].velocity;
+                        Lagged {
+                            node: p,
+                            force: stiffness,
+                            normal: prox.normal,
+                            anchor: std::array::from_fn(|i| start[3 * p + i] + v[i] * dt),
+                        }
+                    })
+                    .collect();
+                Self {
+                    pattern,
+                    pairs,
+                    law: Law::Coulomb,
+                    smooth,
+                    dissipated: 0.0,
+                }
+            }
+            ContactMethod::Lagrange => {
+                let mut term = Self::new(contact, pattern, (start, t0, dt), state);
+                for pair in &mut term.pairs {
+                    pair.force *= 2.0 / smooth;
+                }
+                term
+            }
+        };
+        term.law = Law::Stick;
+        term
+    }
+
+    /// The nodes of the pairs with their `mu lambda` (N; sticking, their
+    /// springs' stiffness), in node order: what a static round compares
+    /// with the next round's lag.
+    pub fn forces(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.pairs.iter().map(|p| (p.node, p.force))
+    }
+
+    /// Sticking, the tangential force the springs carry at `y` (N, summed
+    /// over the nodes): what the contact must hold by friction; 0 for
+    /// Coulomb's law.
+    pub fn stick_force(&self, y: &[f64]) -> f64 {
+        if self.law != Law::Stick {
+            return 0.0;
+        }
+        self.pairs
+            .iter()
+            .map(|pair| {
+                let u = self.slip(pair, y);
+                pair.force * (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()
+            })
+            .sum()
+    }
+
+    /// The pair's tangential slip `u = T (y_p - anchor)` at `y` (m).
+    fn slip(&self, pair: &Lagged, y: &[f64]) -> [f64; 3] {
+        let (p, n) = (pair.node, pair.normal);
+        let d: [f64; 3] = std::array::from_fn(|i| y[3 * p + i] - pair.anchor[i]);
+        let dn = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+        std::array::from_fn(|i| d[i] - dn * n[i])
     }
 
     /// The energy friction dissipates over the step, at the last
@@ -139,14 +266,15 @@ impl StepTerm for FrictionTerm<'_> {
         g: &mut [f64],
         mut h: Option<&mut [f64]>,
     ) -> TermValue {
+        if self.law == Law::Stick {
+            return self.add_stick(y, g, h);
+        }
         let e = self.smooth;
         let (mut energy, mut dissipated, mut scale) = (0.0, 0.0, 0.0);
         for pair in &self.pairs {
             let p = pair.node;
             let n = pair.normal;
-            let d: [f64; 3] = std::array::from_fn(|i| y[3 * p + i] - pair.anchor[i]);
-            let dn = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
-            let u: [f64; 3] = std::array::from_fn(|i| d[i] - dn * n[i]);
+            let u = self.slip(pair, y);
             let s = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
             let (f0, f1, df1) = mollifier(s, e);
             let mu_lambda = pair.force;
@@ -166,17 +294,7 @@ impl StepTerm for FrictionTerm<'_> {
                 } else {
                     (2.0 / e, 0.0)
                 };
-                let block = self
-                    .pattern
-                    .node_block(p, p)
-                    .expect("diagonal blocks are in the pattern");
-                for i in 0..3 {
-                    for j in 0..3 {
-                        let t = f64::from(u8::from(i == j)) - n[i] * n[j];
-                        h[self.pattern.entry(block, p, i, j)] +=
-                            mu_lambda * (a * t + b * u[i] * u[j]);
-                    }
-                }
+                self.add_block(h, (p, n, u), (mu_lambda, a, b));
             }
         }
         self.dissipated = dissipated;
@@ -189,6 +307,53 @@ impl StepTerm for FrictionTerm<'_> {
 
     fn dissipation(&self) -> f64 {
         self.dissipated
+    }
+}
+
+impl FrictionTerm<'_> {
+    /// Adds `c (a T + b u u^T)` to node `p`'s diagonal block of `h`, `T =
+    /// I - n n^T` the tangent projector of the normal `n`, `u` the slip.
+    fn add_block(
+        &self,
+        h: &mut [f64],
+        (p, n, u): (usize, [f64; 3], [f64; 3]),
+        (c, a, b): (f64, f64, f64),
+    ) {
+        let block = self
+            .pattern
+            .node_block(p, p)
+            .expect("diagonal blocks are in the pattern");
+        for i in 0..3 {
+            for j in 0..3 {
+                let t = f64::from(u8::from(i == j)) - n[i] * n[j];
+                h[self.pattern.entry(block, p, i, j)] += c * (a * t + b * u[i] * u[j]);
+            }
+        }
+    }
+
+    /// [`StepTerm::add`] sticking: `1/2 k |u|^2` a pair (module docs),
+    /// which dissipates nothing.
+    fn add_stick(&mut self, y: &[f64], g: &mut [f64], mut h: Option<&mut [f64]>) -> TermValue {
+        let (mut energy, mut scale) = (0.0, 0.0);
+        for pair in &self.pairs {
+            let (p, n, k) = (pair.node, pair.normal, pair.force);
+            let u = self.slip(pair, y);
+            let s2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+            energy += 0.5 * k * s2;
+            scale += k * s2.sqrt();
+            for i in 0..3 {
+                g[3 * p + i] += k * u[i];
+            }
+            if let Some(h) = h.as_deref_mut() {
+                self.add_block(h, (p, n, u), (k, 1.0, 0.0));
+            }
+        }
+        self.dissipated = 0.0;
+        TermValue {
+            value: energy,
+            potential: true,
+            scale,
+        }
     }
 }
 
@@ -278,6 +443,56 @@ mod tests {
         let mut g = vec![0.0; y.len()];
         term.add(&ctx, &y, &mut g, None);
         assert!(term.dissipated() > 0.0);
+    }
+
+    /// A static increment's terms (module docs) against central
+    /// differences: the stick round's springs (every node of the patch
+    /// within the smoothing slip of the plane at the start), and Coulomb's
+    /// friction lagged at other positions than the start the slip is
+    /// measured from; both Hessians semi-definite. Slips as in
+    /// [`friction_term_matches_finite_differences`].
+    #[test]
+    fn static_rounds_match_finite_differences() {
+        let (setup, start) = pressed_patch();
+        let model = &setup.model;
+        let contact = model.contact().expect("an obstacle");
+        let state = contact.initial_state(&start);
+        let y: Vec<f64> = start
+            .iter()
+            .enumerate()
+            .map(|(i, x)| x + 2e-5 * ((i as f64) * 0.7).sin())
+            .collect();
+        let at: Vec<f64> = start.iter().map(|x| x - 2e-4).collect();
+        let terms = [
+            FrictionTerm::stick(contact, model.pattern(), (&start, 0.0, 1e-2), &state),
+            FrictionTerm::lagged_at(
+                contact,
+                model.pattern(),
+                (&at, 1e-2),
+                (&start, 1e-2),
+                &state,
+            ),
+        ];
+        for (k, mut term) in terms.into_iter().enumerate() {
+            assert_eq!(term.pairs.len(), 25, "term {k}: every node");
+            let ctx = StepContext {
+                time: 1e-2,
+                contact: Some(&state),
+                project: None,
+            };
+            let (eh, eg) = check_term(&mut term, &ctx, model.pattern(), &y, 1e-9);
+            assert!(
+                eh < 1e-6 && eg < 1e-6,
+                "term {k}: Hessian {eh:e}, gradient {eg:e}"
+            );
+            let (exact, projected, smallest) =
+                check_projection(&mut term, &ctx, model.pattern(), &y);
+            assert!(
+                smallest > -1e-12,
+                "term {k}: smallest eigenvalue {smallest:e}"
+            );
+            assert_eq!(exact, projected);
+        }
     }
 
     /// With multipliers the lagged normal force is the multiplier of the

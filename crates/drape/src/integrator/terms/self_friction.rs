@@ -34,14 +34,34 @@ impl<'a> SelfFrictionTerm<'a> {
         (start, dt): (&'a [f64], f64),
         hessian: bool,
     ) -> Self {
+        Self::lagged_at(contact, pattern, start, (start, dt), hessian)
+    }
+
+    /// As [`new`](Self::new), the pairs, normals and normal forces lagged
+    /// at positions `at` instead of the start (a static round after the
+    /// first: the previous round's solution, `integrator::statics`); the
+    /// slip still measured from `start`.
+    pub fn lagged_at(
+        contact: &SelfContact,
+        pattern: &'a SparsePattern,
+        at: &[f64],
+        (start, dt): (&'a [f64], f64),
+        hessian: bool,
+    ) -> Self {
         Self {
             pattern,
             start,
-            pairs: contact.lag_friction(start, contact.friction()),
+            pairs: contact.lag_friction(at, contact.friction()),
             smooth: contact.stick_speed() * dt,
             hessian,
             dissipated: 0.0,
         }
+    }
+
+    /// The pairs' first nodes with their `mu lambda` (N), in the broad
+    /// phase's order: what a static round compares with the next round's.
+    pub fn forces(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.pairs.iter().map(|p| (p.nodes[0], p.force))
     }
 }
 
