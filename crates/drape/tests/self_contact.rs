@@ -572,3 +572,39 @@ fn a_mesh_that_crosses_itself_is_refused_with_self_contact() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Issue 46: a dynamic step that fails with self-contact on says that the
+/// barrier at `self_distance` stiffens without bound and what to change
+/// (smaller steps, more halvings, a larger distance); with `linear =
+/// "reuse"` also that that mode lacks the pairs' couplings. (Forced to
+/// fail here by two Newton iterations and no halving: the mechanism is
+/// any failure with self-contact, as a thin barrier's at the impact.)
+#[test]
+fn a_failed_step_with_self_contact_names_the_barrier() {
+    let failure = |linear: &str| {
+        let text = scenario("self = true\nself_distance = 1.0e-6")
+            + &format!("[solver]\nmax_iterations = 2\nmax_cutbacks = 0\n{linear}\n");
+        let out = std::env::temp_dir().join(format!(
+            "drape-thin-barrier-{}-{}",
+            std::process::id(),
+            linear.len()
+        ));
+        let _ = std::fs::remove_dir_all(&out);
+        let e = drape::simulation::run(&setup(&text), &out, &mut |_| {})
+            .expect_err("two iterations cannot settle an impact");
+        let _ = std::fs::remove_dir_all(&out);
+        e.to_string()
+    };
+    let direct = failure("");
+    for f in [
+        "contact.self_distance = 1e-6 m stiffens without bound",
+        "smaller steps",
+        "max_cutbacks, now 0",
+        "a larger self_distance",
+    ] {
+        assert!(direct.contains(f), "expected {f:?} in {direct}");
+    }
+    assert!(!direct.contains("linear = \"direct\""), "{direct}");
+    let reuse = failure("linear = \"reuse\"");
+    assert!(reuse.contains("use linear = \"direct\""), "{reuse}");
+}
