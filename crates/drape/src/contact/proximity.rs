@@ -34,6 +34,13 @@
 //! entries of its cells whose boxes hold it. Linear in the mesh for a
 //! bounded number of entries per cell (a fabric is a surface: a cell as
 //! large as its elements holds a few of them, a fold a few more).
+//! A box over more than [`MAX_CELLS`] cells — in [`swept_candidates`], a
+//! node whose motion is far longer than the cells, or not finite — is
+//! kept out of the grid and tested against every box of the other kind
+//! instead: the grid never holds more than `MAX_CELLS` entries a box,
+//! whatever the motion (issue 46: one Newton direction that moved a few
+//! nodes a metre entered each in millions of cells, and the step never
+//! ended while its memory grew by tens of megabytes a second).
 
 use crate::vec3::{add, dot, scale, sub};
 use std::collections::HashMap;
@@ -188,8 +195,11 @@ pub fn edges_of(triangles: &[[usize; 3]]) -> Vec<[usize; 2]> {
     edges
 }
 
+/// An axis-aligned box, `(min, max)` corners.
+type Aabb = ([f64; 3], [f64; 3]);
+
 /// The box of `points` grown by `by`.
-fn bounds(points: impl Iterator<Item = [f64; 3]>, by: f64) -> ([f64; 3], [f64; 3]) {
+fn bounds(points: impl Iterator<Item = [f64; 3]>, by: f64) -> Aabb {
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for p in points {
         for i in 0..3 {
@@ -201,12 +211,39 @@ fn bounds(points: impl Iterator<Item = [f64; 3]>, by: f64) -> ([f64; 3], [f64; 3
 }
 
 /// Whether two boxes overlap.
-fn overlap(a: &([f64; 3], [f64; 3]), b: &([f64; 3], [f64; 3])) -> bool {
+fn overlap(a: &Aabb, b: &Aabb) -> bool {
     (0..3).all(|i| a.0[i] <= b.1[i] && b.0[i] <= a.1[i])
 }
 
+/// The most grid cells a box is entered in, or has its cells looked up
+/// in (module docs): more than a box as large as the cells meets (at most
+/// 2 x 2 x 2) and than [`candidates`] makes (its boxes are at most three
+/// cells long, 4 x 4 x 4 cells).
+const MAX_CELLS: f64 = 64.0;
+
+/// How many cells of size `h` box `b` overlaps; infinite for a box that
+/// is not finite.
+fn cell_count(b: &Aabb, h: f64) -> f64 {
+    (0..3)
+        .map(|i| (b.1[i] / h).floor() - (b.0[i] / h).floor() + 1.0)
+        .map(|n| {
+            if n.is_finite() {
+                n.max(1.0)
+            } else {
+                f64::INFINITY
+            }
+        })
+        .product()
+}
+
+/// Whether box `b` is kept out of a grid of cells of size `h` and tested
+/// against every box instead ([`MAX_CELLS`]).
+fn too_large(b: &Aabb, h: f64) -> bool {
+    cell_count(b, h) > MAX_CELLS
+}
+
 /// The grid's cells a box overlaps (cell size `h`).
-fn cells(b: &([f64; 3], [f64; 3]), h: f64) -> impl Iterator<Item = [i64; 3]> {
+fn cells(b: &Aabb, h: f64) -> impl Iterator<Item = [i64; 3]> {
     let lo = b.0.map(|v| (v / h).floor() as i64);
     let hi = b.1.map(|v| (v / h).floor() as i64);
     (lo[0]..=hi[0]).flat_map(move |i| {
@@ -249,29 +286,50 @@ pub fn swept_candidates(
     edges: &[[usize; 2]],
     margin: f64,
 ) -> Candidates {
-    let end: Vec<[f64; 3]> = x.iter().zip(dx).map(|(&p, &d)| add(p, d)).collect();
-    let both = |nodes: &[usize]| bounds(nodes.iter().flat_map(|&a| [x[a], end[a]]), margin);
-    let point_box: Vec<_> = (0..x.len()).map(|p| both(&[p])).collect();
-    let tri_box: Vec<_> = triangles.iter().map(|t| both(t)).collect();
-    let edge_box: Vec<_> = edges.iter().map(|e| both(e)).collect();
-    let extent = |b: &([f64; 3], [f64; 3])| (0..3).map(|i| b.1[i] - b.0[i]).fold(0.0, f64::max);
-    // Cells as large as the typical box (the median edge box), not the
-    // largest: one far-moving node must not coarsen the whole grid.
-    let mut sizes: Vec<f64> = edge_box.iter().map(extent).collect();
-    let h = if sizes.is_empty() {
-        1.0
-    } else {
-        let mid = sizes.len() / 2;
-        *sizes.select_nth_unstable_by(mid, f64::total_cmp).1
-    };
-    pairs_of_boxes(
-        &point_box,
-        &tri_box,
-        &edge_box,
-        triangles,
-        edges,
-        h.max(f64::MIN_POSITIVE),
-    )
+    let b = SweptBoxes::new(x, dx, triangles, edges, margin);
+    pairs_of_boxes(&b.points, &b.triangles, &b.edges, triangles, edges, b.h)
+}
+
+/// The boxes of [`swept_candidates`] and the size of its grid's cells.
+struct SweptBoxes {
+    points: Vec<Aabb>,
+    triangles: Vec<Aabb>,
+    edges: Vec<Aabb>,
+    h: f64,
+}
+
+impl SweptBoxes {
+    fn new(
+        x: &[[f64; 3]],
+        dx: &[[f64; 3]],
+        triangles: &[[usize; 3]],
+        edges: &[[usize; 2]],
+        margin: f64,
+    ) -> Self {
+        let end: Vec<[f64; 3]> = x.iter().zip(dx).map(|(&p, &d)| add(p, d)).collect();
+        let both = |nodes: &[usize]| bounds(nodes.iter().flat_map(|&a| [x[a], end[a]]), margin);
+        let points: Vec<_> = (0..x.len()).map(|p| both(&[p])).collect();
+        let tri_box: Vec<_> = triangles.iter().map(|t| both(t)).collect();
+        let edge_box: Vec<_> = edges.iter().map(|e| both(e)).collect();
+        let extent = |b: &Aabb| (0..3).map(|i| b.1[i] - b.0[i]).fold(0.0, f64::max);
+        // Cells as large as the typical box (the median edge box), not the
+        // largest: one far-moving node must not coarsen the whole grid.
+        let mut sizes: Vec<f64> = edge_box.iter().map(extent).collect();
+        let h = if sizes.is_empty() {
+            1.0
+        } else {
+            let mid = sizes.len() / 2;
+            *sizes.select_nth_unstable_by(mid, f64::total_cmp).1
+        };
+        Self {
+            points,
+            triangles: tri_box,
+            edges: edge_box,
+            // (A median that is not finite: every box is then over more
+            // than `MAX_CELLS` cells, and none is entered.)
+            h: h.max(f64::MIN_POSITIVE),
+        }
+    }
 }
 
 /// The longest edge at `x`.
@@ -286,20 +344,33 @@ fn longest_edge(x: &[[f64; 3]], edges: &[[usize; 2]]) -> f64 {
 }
 
 /// A uniform grid of cells of size `h`, hashed: for each cell, the boxes
-/// that overlap it.
+/// that overlap it; the boxes over more than [`MAX_CELLS`] cells apart.
 struct Grid {
     cells: HashMap<[i64; 3], Vec<usize>>,
+    /// The boxes not entered in the cells ([`too_large`]).
+    large: Vec<usize>,
 }
 
 impl Grid {
-    fn new(boxes: &[([f64; 3], [f64; 3])], h: f64) -> Self {
+    fn new(boxes: &[Aabb], h: f64) -> Self {
         let mut map: HashMap<[i64; 3], Vec<usize>> = HashMap::with_capacity(boxes.len());
+        let mut large = Vec::new();
         for (k, b) in boxes.iter().enumerate() {
+            if too_large(b, h) {
+                large.push(k);
+                continue;
+            }
             for c in cells(b, h) {
                 map.entry(c).or_default().push(k);
             }
         }
-        Self { cells: map }
+        Self { cells: map, large }
+    }
+
+    /// How many entries the cells hold (the grid's memory).
+    #[cfg(test)]
+    fn entries(&self) -> usize {
+        self.cells.values().map(Vec::len).sum()
     }
 
     /// The boxes entered in `cell`.
@@ -311,9 +382,9 @@ impl Grid {
 /// The node–triangle pairs (the node not a vertex) and edge–edge pairs
 /// (sharing no node) whose boxes overlap, by a grid of cells of size `h`.
 fn pairs_of_boxes(
-    point_box: &[([f64; 3], [f64; 3])],
-    tri_box: &[([f64; 3], [f64; 3])],
-    edge_box: &[([f64; 3], [f64; 3])],
+    point_box: &[Aabb],
+    tri_box: &[Aabb],
+    edge_box: &[Aabb],
     triangles: &[[usize; 3]],
     edges: &[[usize; 2]],
     h: f64,
@@ -322,22 +393,35 @@ fn pairs_of_boxes(
     let edge_grid = Grid::new(edge_box, h);
     let mut out = Candidates::default();
     for (p, pb) in point_box.iter().enumerate() {
-        for cell in cells(pb, h) {
-            for k in tri_grid.get(cell) {
-                if !triangles[k].contains(&p) && overlap(pb, &tri_box[k]) {
-                    out.point_triangle.push((p, k));
-                }
+        let mut test = |k: usize| {
+            if !triangles[k].contains(&p) && overlap(pb, &tri_box[k]) {
+                out.point_triangle.push((p, k));
             }
+        };
+        // A large box against every triangle, a small one against those
+        // of its cells and the large ones.
+        if too_large(pb, h) {
+            (0..tri_box.len()).for_each(&mut test);
+        } else {
+            cells(pb, h).for_each(|cell| tri_grid.get(cell).for_each(&mut test));
+            tri_grid.large.iter().copied().for_each(&mut test);
         }
     }
     for (k, b) in edge_box.iter().enumerate() {
-        for cell in cells(b, h) {
-            for m in edge_grid.get(cell) {
-                let (e, f) = (edges[k], edges[m]);
-                if m > k && !e.contains(&f[0]) && !e.contains(&f[1]) && overlap(b, &edge_box[m]) {
-                    out.edge_edge.push((k, m));
-                }
+        let e = edges[k];
+        let mut test = |m: usize| {
+            let f = edges[m];
+            if m > k && !e.contains(&f[0]) && !e.contains(&f[1]) && overlap(b, &edge_box[m]) {
+                out.edge_edge.push((k, m));
             }
+        };
+        // (A small edge meets a large one of lower index when that one is
+        // tested against every edge after it.)
+        if too_large(b, h) {
+            (k + 1..edge_box.len()).for_each(&mut test);
+        } else {
+            cells(b, h).for_each(|cell| edge_grid.get(cell).for_each(&mut test));
+            edge_grid.large.iter().copied().for_each(&mut test);
         }
     }
     out.point_triangle.sort_unstable();
@@ -452,6 +536,33 @@ pub fn crossing_pairs(
     found.sort_unstable();
     found.dedup();
     found
+}
+
+/// Square plies of 10 cm in 8 x 8 squares (`Pattern::Right`), flat at
+/// the heights `heights` (m): their nodes and triangles, ply after ply
+/// (81 nodes each). The tests' two-ply meshes.
+#[cfg(test)]
+pub(crate) fn test_plies(heights: &[f64]) -> (Vec<[f64; 3]>, Vec<[usize; 3]>) {
+    use crate::mesh::ElementOrder;
+    use crate::mesh::generate::{Pattern, rectangle};
+    let (mut x, mut triangles) = (Vec::new(), Vec::new());
+    for &z in heights {
+        let sheet = rectangle(
+            [0.1, 0.1],
+            [8, 8],
+            Pattern::Right,
+            [0.0; 3],
+            ElementOrder::Linear,
+        );
+        let base = x.len();
+        x.extend(sheet.nodes.iter().map(|&[u, v, _]| [u, v, z]));
+        triangles.extend(
+            sheet
+                .elements()
+                .map(|e| [base + e[0], base + e[1], base + e[2]]),
+        );
+    }
+    (x, triangles)
 }
 
 #[cfg(test)]
@@ -669,31 +780,13 @@ mod tests {
     #[test]
     fn swept_candidates_hold_every_pair_that_meets() {
         use crate::contact::barrier::{PairKind, additive_ccd};
-        use crate::mesh::ElementOrder;
-        use crate::mesh::generate::{Pattern, rectangle};
-        let (mut x, mut dx, mut triangles) = (Vec::new(), Vec::new(), Vec::new());
-        for ply in [0.0, 0.01] {
-            let sheet = rectangle(
-                [0.1, 0.1],
-                [8, 8],
-                Pattern::Right,
-                [0.0; 3],
-                ElementOrder::Linear,
-            );
-            let base = x.len();
-            x.extend(sheet.nodes.iter().map(|&[u, v, _]| [u + 3.0 * ply, v, ply]));
-            dx.extend(
-                sheet
-                    .nodes
-                    .iter()
-                    .map(|_| [0.0, 0.0, if ply > 0.0 { -0.02 } else { 0.0 }]),
-            );
-            triangles.extend(
-                sheet
-                    .elements()
-                    .map(|e| [base + e[0], base + e[1], base + e[2]]),
-            );
+        let (mut x, triangles) = test_plies(&[0.0, 0.01]);
+        for p in &mut x {
+            p[0] += 3.0 * p[2];
         }
+        let mut dx: Vec<[f64; 3]> = (x.iter())
+            .map(|p| [0.0, 0.0, if p[2] > 0.0 { -0.02 } else { 0.0 }])
+            .collect();
         let far = x.len() - 5;
         dx[far] = [0.3, 0.0, -0.02];
         let edges = edges_of(&triangles);
@@ -751,6 +844,71 @@ mod tests {
             }
         }
         assert!(met > 50, "{met}");
+    }
+
+    /// Issue 46: a Newton direction that moves a few nodes far (here one
+    /// node 0.5 m along a diagonal, the cells being about 1.3 cm) entered
+    /// each of their swept boxes in some 70,000 cells; one moved a metre
+    /// ran the step out of memory. Now the grid holds at most
+    /// [`MAX_CELLS`] entries a box whatever the motion, far or not finite,
+    /// and the candidates are still exactly the pairs whose swept boxes
+    /// overlap (tested pair by pair).
+    #[test]
+    fn a_far_motion_keeps_the_grid_small_and_the_candidates_exact() {
+        let (x, triangles) = test_plies(&[0.0, 0.004]);
+        let edges = edges_of(&triangles);
+        let mut dx = vec![[0.0, 0.0, -0.002]; x.len()];
+        for p in dx.iter_mut().take(x.len() / 2) {
+            *p = [0.0; 3];
+        }
+        // A node of the upper ply near its first corner, one in the
+        // middle of the lower.
+        let (far, other) = (x.len() / 2 + 10, 40);
+        let brute = |dx: &[[f64; 3]]| {
+            let sweep =
+                |nodes: &[usize]| bounds(nodes.iter().flat_map(|&a| [x[a], add(x[a], dx[a])]), 0.0);
+            let mut c = Candidates::default();
+            for p in 0..x.len() {
+                for (k, t) in triangles.iter().enumerate() {
+                    if !t.contains(&p) && overlap(&sweep(&[p]), &sweep(t)) {
+                        c.point_triangle.push((p, k));
+                    }
+                }
+            }
+            for (k, e) in edges.iter().enumerate() {
+                for (m, f) in edges.iter().enumerate().skip(k + 1) {
+                    if !e.contains(&f[0]) && !e.contains(&f[1]) && overlap(&sweep(e), &sweep(f)) {
+                        c.edge_edge.push((k, m));
+                    }
+                }
+            }
+            c
+        };
+        for (what, moves) in [
+            ("0.5 m", [[0.5, 0.5, -0.5], [0.0; 3]]),
+            ("two nodes 2 m", [[2.0, -2.0, 2.0], [-2.0, 2.0, -2.0]]),
+            ("infinite", [[f64::INFINITY, 0.0, 0.0], [0.0; 3]]),
+            ("not a number", [[f64::NAN, 0.0, 0.0], [0.0; 3]]),
+        ] {
+            let mut dx = dx.clone();
+            dx[far] = moves[0];
+            dx[other] = moves[1];
+            let b = SweptBoxes::new(&x, &dx, &triangles, &edges, 0.0);
+            for boxes in [&b.triangles, &b.edges] {
+                let entries = Grid::new(boxes, b.h).entries();
+                assert!(
+                    entries as f64 <= MAX_CELLS * boxes.len() as f64,
+                    "{what}: {entries} entries for {} boxes",
+                    boxes.len()
+                );
+            }
+            let swept = swept_candidates(&x, &dx, &triangles, &edges, 0.0);
+            assert_eq!(swept, brute(&dx), "{what}");
+            if what == "0.5 m" {
+                // The far node's pairs are among them.
+                assert!(swept.point_triangle.iter().filter(|c| c.0 == far).count() > 50);
+            }
+        }
     }
 
     /// Two squares of two triangles each, one crossing the other's plane

@@ -423,8 +423,12 @@ impl SelfContact {
     }
 
     /// The largest fraction in `(0, 1]` of `dy` from `y` that keeps every
-    /// pair apart (module docs).
+    /// pair apart (module docs); 0 for an increment that is not finite
+    /// (no step along it is admissible: the step is cut back).
     pub fn max_step(&self, y: &[f64], dy: &[f64]) -> f64 {
+        if !dy.iter().all(|v| v.is_finite()) {
+            return 0.0;
+        }
         let (x, p) = (points(y), points(dy));
         let reach = p.iter().map(|v| norm(*v)).fold(0.0f64, f64::max);
         if reach == 0.0 {
@@ -637,6 +641,35 @@ fn scatter(
                     }
                 }
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::proximity::test_plies;
+
+    /// Issue 46: two plies 4 mm apart, `d̂` = 1 mm. A Newton increment
+    /// that throws one node of the upper ply a metre down through the
+    /// lower is cut to a fraction that stops it above the lower ply (the
+    /// broad phase no longer enters its swept box in half a million
+    /// cells); an increment that is not finite admits no step.
+    #[test]
+    fn a_far_or_infinite_increment_is_cut_short() {
+        let (x, triangles) = test_plies(&[0.0, 0.004]);
+        let y: Vec<f64> = x.concat();
+        let sc = SelfContact::new(triangles, &y, 1e-3, 5e4).unwrap();
+        // A node inside the upper ply (row 4, column 4 of 9 x 9).
+        let node = 81 + 40;
+        let mut dy = vec![0.0; y.len()];
+        dy[3 * node..3 * node + 3].copy_from_slice(&[0.6, 0.6, -0.6]);
+        let t = sc.max_step(&y, &dy);
+        // Its 4 mm fall to the lower ply is 1/150 of the increment.
+        assert!(t > 0.0 && t < 0.004 / 0.6, "{t}");
+        for bad in [f64::INFINITY, f64::NAN] {
+            dy[3 * node] = bad;
+            assert_eq!(sc.max_step(&y, &dy), 0.0);
         }
     }
 }
