@@ -105,7 +105,7 @@ pub fn energy(patch: &Patch, x: &[[f64; 3]]) -> f64 {
 /// and Hessian into `out` (the gradient always). With `gauss_newton`, the
 /// Hessian is its Gauss–Newton part `K^T (A D') K` alone, positive
 /// semi-definite by construction: what the projected Newton asks for
-/// (`project` of [`crate::bending::Bending::add`]), without the
+/// (`project` of `Bending::add`), without the
 /// eigendecomposition of a matrix of up to 54 x 54 that the nearest
 /// semi-definite matrix would take.
 //

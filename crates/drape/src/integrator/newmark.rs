@@ -45,6 +45,19 @@ pub struct Newmark {
     pub gamma: f64,
 }
 
+/// A static increment that friction could not hold: its stick round found
+/// equilibrium, a round with Coulomb's limit did not (`integrator::statics`;
+/// kept in the steppers' shared workspace, [`DynamicWorkspace`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrictionShortfall {
+    /// The tangential force the sticking nodes carried (N, summed over
+    /// them).
+    pub needed: f64,
+    /// Coulomb's limit `mu lambda` at the stick round's solution (N,
+    /// summed over the nodes in contact).
+    pub limit: f64,
+}
+
 /// Buffers of a dynamic run.
 #[derive(Debug)]
 pub struct DynamicWorkspace {
@@ -74,7 +87,7 @@ pub struct DynamicWorkspace {
     pub(crate) lag: Vec<f64>,
     /// Why the last static increment failed, when friction could not
     /// hold its load (`integrator::statics`).
-    pub(crate) friction_shortfall: Option<super::statics::FrictionShortfall>,
+    pub(crate) friction_shortfall: Option<FrictionShortfall>,
 }
 
 impl DynamicWorkspace {
@@ -105,7 +118,7 @@ impl DynamicWorkspace {
 
     /// When the last static increment failed because friction could not
     /// hold its load: the forces compared (`integrator::statics`).
-    pub fn friction_shortfall(&self) -> Option<super::statics::FrictionShortfall> {
+    pub fn friction_shortfall(&self) -> Option<FrictionShortfall> {
         self.friction_shortfall
     }
 

@@ -29,7 +29,7 @@
 
 use super::terms::{FrictionTerm, SelfFrictionTerm};
 use super::{FrictionLag, State, StepTerms, merge_reports, solve_step};
-use crate::integrator::newmark::{DynamicWorkspace, StepOutcome};
+use crate::integrator::newmark::{DynamicWorkspace, FrictionShortfall, StepOutcome};
 use crate::model::Model;
 use crate::solver::newton::{NewtonError, NewtonSettings};
 
@@ -43,18 +43,6 @@ pub const SETTLED: f64 = 1e-2;
 /// The most rounds of a static increment's friction after its stick
 /// round; the last is kept.
 pub const FRICTION_ROUNDS: usize = 8;
-
-/// A static increment that friction could not hold: its stick round found
-/// equilibrium, a round with Coulomb's limit did not.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FrictionShortfall {
-    /// The tangential force the sticking nodes carried (N, summed over
-    /// them).
-    pub needed: f64,
-    /// Coulomb's limit `mu lambda` at the stick round's solution (N,
-    /// summed over the nodes in contact).
-    pub limit: f64,
-}
 
 /// Load stepping: each step raises the load factor by the increment it
 /// is given (the schedule's `1 / steps`) and solves for equilibrium.

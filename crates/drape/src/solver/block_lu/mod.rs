@@ -261,7 +261,7 @@ impl BlockLu {
     /// longer of the two paths (a half, then the separator) at most 70 %
     /// of AMD's work and adds at most 20 % to the total (the pedestal's
     /// counts: docs/performance.md, "The round before"); where no cut
-    /// does, at most 85 % and 50 % ([`SPLIT_BOUNDS`]: bending's wide
+    /// does, at most 85 % and 50 % (`SPLIT_BOUNDS`: bending's wide
     /// stencils, whose level-set separators are wide). Whether it is
     /// split depends on the graph alone, never on the machine, so results
     /// do not either.
