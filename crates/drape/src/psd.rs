@@ -30,9 +30,10 @@ use faer::linalg::cholesky::llt::factor::{
 use faer::linalg::evd::{self, ComputeEigenvectors};
 use faer::{ColMut, MatMut, MatRef, Par};
 
-/// Largest matrix a [`Projector`] takes: a bending patch's (18 nodes; a
-/// T10 element has 10).
-pub const MAX_DIM: usize = 3 * crate::bending::kernel::MAX_NODES;
+/// Largest matrix a [`Projector`] takes: a T10 element (10 nodes). A
+/// bending patch (up to 18 nodes) is not projected here: it takes its
+/// Gauss–Newton part (`bending::kernel::evaluate_with`).
+pub const MAX_DIM: usize = 30;
 
 /// Relative shift of the semi-definiteness test: eigenvalues above
 /// `-DELTA max |K_ii|` count as non-negative (round-off of a Hessian

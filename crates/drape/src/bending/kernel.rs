@@ -219,7 +219,9 @@ pub fn evaluate_with(
     let skews = edges.map(skew);
     let skew_u = skew(u);
     for k in 0..len {
-        for l in 0..len {
+        // Only the triangle's vertices (k or l < 3) move the normal: the
+        // blocks between two other nodes have no curvature part.
+        for l in 0..if k < 3 { len } else { 3 } {
             let mut block = [[0.0; 3]; 3];
             if l < 3 {
                 for i in 0..3 {
