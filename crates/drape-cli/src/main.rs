@@ -216,8 +216,15 @@ fn main() -> ExitCode {
 
 /// The scenario at `path` built, with its text.
 fn load(path: &Path) -> Result<(Setup, String), Failure> {
+    let (setup, source, _) = load_scenario(path)?;
+    Ok((setup, source))
+}
+
+/// [`load`], and the scenario itself (what the levels of a `[refine]`
+/// run are built from).
+fn load_scenario(path: &Path) -> Result<(Setup, String, Scenario), Failure> {
     let (scenario, source) = Scenario::read(path)?;
-    Ok((scenario.build(path, &source)?, source))
+    Ok((scenario.build(path, &source)?, source, scenario))
 }
 
 fn check(path: &Path) -> Result<(), Failure> {
@@ -280,7 +287,7 @@ fn check(path: &Path) -> Result<(), Failure> {
                 );
             }
         }
-        drape::setup::Analysis::Static { steps } => {
+        drape::setup::Analysis::Static { steps, .. } => {
             println!(
                 "  static    {steps} load {}",
                 if *steps == 1 {
@@ -322,8 +329,8 @@ fn run(
         Some(dir) => Some(Session::resume(dir, Front::CommandLine).map_err(directory_error)?),
         None => None,
     };
-    let (path, (setup, text)) = match (&scenario, &resumed) {
-        (Some(p), None) => (p.clone(), load(p)?),
+    let (path, (setup, text, parsed)) = match (&scenario, &resumed) {
+        (Some(p), None) => (p.clone(), load_scenario(p)?),
         (_, Some(session)) => load_to_resume(scenario.clone(), session)?,
         (None, None) => unreachable!("clap requires one of them"),
     };
@@ -359,7 +366,14 @@ fn run(
         eprintln!("warning: {warning}");
     }
     let control = session.control(Some(&signals::STOP));
-    let result = simulation::run_with(&setup, out, &mut |info| progress.step(info), control);
+    let result = drape::levels::run_with(
+        &parsed,
+        (path, &text),
+        &setup,
+        out,
+        &mut |info| progress.step(info),
+        control,
+    );
     if let Some(bar) = &progress.bar {
         bar.finish_and_clear();
     }
@@ -387,7 +401,7 @@ fn run(
 fn load_to_resume(
     scenario: Option<PathBuf>,
     session: &Session,
-) -> Result<(PathBuf, (Setup, String)), Failure> {
+) -> Result<(PathBuf, (Setup, String, Scenario)), Failure> {
     let path = match scenario {
         Some(p) => p,
         None => session.started_with().map_err(|e| {
@@ -406,7 +420,7 @@ fn load_to_resume(
     session
         .check_inputs()
         .map_err(|message| Failure::Input(anyhow::anyhow!(message)))?;
-    let loaded = load(&path).map_err(|failure| record_refusal(session, failure))?;
+    let loaded = load_scenario(&path).map_err(|failure| record_refusal(session, failure))?;
     Ok((path, loaded))
 }
 

@@ -31,6 +31,8 @@ pub struct Loaded {
     pub setup: Setup,
     /// The scenario's text (for a dict: the text written to `OUT/scenario.toml`).
     pub text: String,
+    /// The scenario (what a `[refine]` run builds its levels from).
+    pub scenario: Scenario,
 }
 
 impl Source {
@@ -65,7 +67,11 @@ impl Source {
             Source::Dict(text) => (Scenario::parse(text, self.file())?, text.clone()),
         };
         let setup = scenario.build(self.file(), &text)?;
-        Ok(Loaded { setup, text })
+        Ok(Loaded {
+            setup,
+            text,
+            scenario,
+        })
     }
 }
 

@@ -18,7 +18,7 @@ use crate::errors::{output_error, run_error, scenario_error};
 use crate::input::Source;
 use crate::result::{RunResult, absolute, json_to_py};
 use drape::output::directory::DirectoryError;
-use drape::simulation::{self, Front, RunError, Session, StepInfo};
+use drape::simulation::{Front, RunError, Session, StepInfo};
 use pyo3::exceptions::{PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -132,7 +132,9 @@ pub fn run(
                 stop.store(true, Ordering::SeqCst);
             }
         };
-        simulation::run_with(
+        drape::levels::run_with(
+            &loaded.scenario,
+            (source.file(), &loaded.text),
             &loaded.setup,
             &out,
             &mut observer,

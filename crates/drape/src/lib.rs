@@ -23,6 +23,7 @@ pub mod fd;
 pub mod human;
 pub mod input;
 pub mod integrator;
+pub mod levels;
 pub mod load;
 pub mod material;
 pub mod measure;

@@ -35,6 +35,11 @@ pub enum Analysis {
     Static {
         /// Increments.
         steps: usize,
+        /// The "time" the load factor is counted from (0, but a finer
+        /// level's of a multilevel settle: the coarser level's end, so
+        /// that the history's time and the frames' go on rising): the
+        /// load factor is `time - from`.
+        from: f64,
     },
 }
 
@@ -45,7 +50,7 @@ impl Analysis {
     pub fn schedule(&self) -> Vec<(usize, f64)> {
         match self {
             Analysis::Dynamic { segments, .. } => segments.clone(),
-            Analysis::Static { steps } => vec![(*steps, 1.0 / *steps as f64)],
+            Analysis::Static { steps, .. } => vec![(*steps, 1.0 / *steps as f64)],
         }
     }
 
@@ -56,7 +61,7 @@ impl Analysis {
             Analysis::Dynamic { segments, .. } => {
                 segments.iter().map(|(n, dt)| *n as f64 * dt).sum()
             }
-            Analysis::Static { .. } => 1.0,
+            Analysis::Static { from, .. } => from + 1.0,
         }
     }
 }
@@ -96,6 +101,27 @@ pub struct Setup {
     /// scenario order, with the hash of the bytes read: a resumed run
     /// refuses a changed one.
     pub inputs: Vec<InputFile>,
+    /// `[refine]`: the multilevel settle, if asked for.
+    pub refine: Option<Refine>,
+}
+
+/// The most levels `[refine] levels` may ask for: four splits make 256
+/// triangles of one.
+pub const MAX_REFINE_LEVELS: usize = 4;
+
+/// `[refine]`, checked: how a run refines its mesh between levels
+/// (`crate::levels`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Refine {
+    /// The most splits (levels after the first), >= 1.
+    pub levels: usize,
+    /// Every triangle (`where = "all"`), else where the folds are.
+    pub uniform: bool,
+    /// The drape coefficient change between two levels below which the
+    /// run stops refining.
+    pub tolerance: f64,
+    /// Dörfler's bulk share of the curvature indicator, in (0, 1].
+    pub fraction: f64,
 }
 
 /// `[time] adaptive = true`: the settings of the [`StepController`](crate::simulation::schedule::StepController).
@@ -135,7 +161,10 @@ mod tests {
         };
         assert_eq!(dynamic.end_time(), 2.5);
         assert_eq!(dynamic.schedule(), vec![(3, 0.5), (2, 0.25), (4, 0.125)]);
-        let statics = Analysis::Static { steps: 4 };
+        let statics = Analysis::Static {
+            steps: 4,
+            from: 0.0,
+        };
         assert_eq!(statics.end_time(), 1.0);
         assert_eq!(statics.schedule(), vec![(4, 0.25)]);
     }

@@ -316,6 +316,10 @@ fn as_version_3(bytes: &[u8]) -> Vec<u8> {
         }
         at += 8;
     }
+    // Version 8's levels follow the inputs: no refinement, no level (two
+    // counts of 0).
+    assert_eq!(bytes[at..at + 16], [0; 16], "no levels");
+    at += 16;
     // Version 7's self-contact layout ends the body (none here: a count
     // of 0), after version 6's kept linear-solver state: a direct solve
     // keeps nothing, its two flags 0.

@@ -73,7 +73,7 @@ fn readme() -> String {
 }
 
 /// The tables whose keys are fixed, with a probe giving an unknown key.
-const TABLES: [(&str, &str); 10] = [
+const TABLES: [(&str, &str); 11] = [
     ("top level", "zzz = 1\n"),
     ("`[mesh]`", "[mesh]\nzzz = 1\n"),
     ("`[material]`", "[material]\nzzz = 1\n"),
@@ -84,6 +84,7 @@ const TABLES: [(&str, &str); 10] = [
     ("`[solver]`", "[solver]\nzzz = 1\n"),
     ("`[output]`", "[output]\nzzz = 1\n"),
     ("`[[monitor]]`", "[[monitor]]\nzzz = 1\n"),
+    ("`[refine]`", "[refine]\nzzz = 1\n"),
 ];
 
 /// The choices of a table read apart: its heading, its tag, and a probe

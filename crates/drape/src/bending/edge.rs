@@ -72,6 +72,12 @@ pub struct EdgeFit {
     pub along: Vec<f64>,
     /// `S_k`: `x_,m(M) = sum_k S_k x_k` (1/m); empty unless fitted.
     pub across: Vec<f64>,
+    /// `W_k`: the quadratic's value at the midpoint, `q(M) = sum_k W_k
+    /// x_k` (the chord's midpoint, `1/2, 1/2`, unless fitted): where a
+    /// refinement places the node that halves the edge, on the surface
+    /// the fit describes. The weights sum to 1 (a rigid motion moves it
+    /// rigidly) and are exact for every quadratic field.
+    pub middle: Vec<f64>,
     /// The unit tangent `t`, from the edge's lower-numbered node.
     pub tangent: [f64; 3],
     /// The unit cross-edge direction `m = N x t` of the chart.
@@ -124,6 +130,7 @@ impl EdgeFit {
             nodes: vec![a, b],
             along: vec![-1.0 / length, 1.0 / length],
             across: Vec::new(),
+            middle: vec![0.5, 0.5],
             tangent,
             cross: cross_dir,
             length,
@@ -156,7 +163,9 @@ impl EdgeFit {
         let mut further = further.iter();
         let mut added = 0;
         loop {
-            if let Some((along, across)) = constrained_fit(&inner.map(chart), &outer, &chart) {
+            if let Some((middle, along, across)) =
+                constrained_fit(&inner.map(chart), &outer, &chart)
+            {
                 let mut nodes = inner.to_vec();
                 nodes.extend_from_slice(&outer);
                 return Self {
@@ -164,6 +173,7 @@ impl EdgeFit {
                     nodes,
                     along: along.iter().map(|v| v / length).collect(),
                     across: across.iter().map(|v| v / length).collect(),
+                    middle,
                     tangent,
                     cross: cross_dir,
                     length,
@@ -193,16 +203,16 @@ fn monomials(p: [f64; 2]) -> [f64; 6] {
     ]
 }
 
-/// The derivatives at the origin (`c_1`, `c_2`) of the quadratic through
-/// the four `inner` points that fits the `outer` nodes (charted by
-/// `chart`) by least squares, as coefficients of the node values, inner
-/// first; `None` where it is not unique.
+/// The value and the derivatives at the origin (`c_0`, `c_1`, `c_2`) of
+/// the quadratic through the four `inner` points that fits the `outer`
+/// nodes (charted by `chart`) by least squares, as coefficients of the
+/// node values, inner first; `None` where it is not unique.
 #[allow(clippy::type_complexity)]
 fn constrained_fit(
     inner: &[[f64; 2]; 4],
     outer: &[usize],
     chart: &impl Fn(usize) -> [f64; 2],
-) -> Option<(Vec<f64>, Vec<f64>)> {
+) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
     // KKT: [V_o^T V_o  V_i^T; V_i  0] [c; lambda] = [V_o^T w_o; w_i].
     const N: usize = 10;
     let ko = outer.len();
@@ -231,6 +241,7 @@ fn constrained_fit(
     }
     solve_dense(kkt, &mut rhs)?;
     Some((
+        rhs.iter().map(|r| r[0]).collect(),
         rhs.iter().map(|r| r[1]).collect(),
         rhs.iter().map(|r| r[2]).collect(),
     ))

@@ -336,6 +336,33 @@ impl Neighbours {
     }
 }
 
+/// For each edge `[a, b]` (`a < b`), the nodes and weights of the
+/// position of its midpoint ([`edge_midpoints`]).
+pub type MidpointRules = std::collections::HashMap<[usize; 2], (Vec<usize>, Vec<f64>)>;
+
+/// Where a refinement places the node halving each edge of `mesh` (a
+/// linear mesh): for each edge `[a, b]` (`a < b`), the nodes and weights
+/// of its fit's value at the midpoint ([`EdgeFit::middle`]) — on the
+/// quadratic surface through the edge's two triangles and the nodes
+/// around them, fitted on the reference positions, applied to any
+/// positions (the current shape, the reference itself, the velocities).
+/// A boundary edge's is the chord's midpoint.
+///
+/// # Errors
+/// [`BendingError::NonManifold`]: an edge of more than two triangles.
+pub fn edge_midpoints(mesh: &Mesh) -> Result<MidpointRules, BendingError> {
+    let neighbours = Neighbours::of(mesh)?;
+    let (fits, _) = neighbours.edge_fits(&mesh.nodes, |_| false);
+    Ok(fits
+        .into_iter()
+        .map(|f| {
+            let ends = [f.nodes[0], f.nodes[1]];
+            let used = f.middle.len();
+            (ends, (f.nodes[..used].to_vec(), f.middle))
+        })
+        .collect())
+}
+
 /// The stencils the bending patches of `mesh` have, in CSR form `(ptr,
 /// nodes)`, found from the mesh's topology alone, without fitting the
 /// patches: each (sub-)triangle with a neighbour, its three nodes, the

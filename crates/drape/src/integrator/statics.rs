@@ -62,7 +62,23 @@ impl StaticStepper {
         length: f64,
         ws: &mut DynamicWorkspace,
     ) -> Result<StepOutcome, NewtonError> {
-        let lambda = (state.time + dlambda).min(1.0 + 1e-12);
+        self.step_from(0.0, model, state, dlambda, settings, length, ws)
+    }
+
+    /// [`StaticStepper::step`] with the load factor counted from the time
+    /// `from`: `lambda = state.time - from` ([`crate::setup::Analysis::Static`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn step_from(
+        &self,
+        from: f64,
+        model: &Model,
+        state: &mut State,
+        dlambda: f64,
+        settings: &NewtonSettings,
+        length: f64,
+        ws: &mut DynamicWorkspace,
+    ) -> Result<StepOutcome, NewtonError> {
+        let lambda = (state.time - from + dlambda).min(1.0 + 1e-12);
         model.dead_forces(lambda, Some(lambda), &mut ws.dead);
         ws.old_ext.copy_from_slice(&ws.f_ext);
         ws.y.copy_from_slice(&state.positions);
@@ -142,7 +158,7 @@ impl StaticStepper {
             work += 0.5 * (ws.old_ext[i] + ws.f_ext[i]) * (ws.y[i] - state.positions[i]);
         }
         std::mem::swap(&mut state.positions, &mut ws.y);
-        state.time = lambda;
+        state.time = from + lambda;
         state.external_work += work;
         state.friction_dissipation += energies.friction;
         Ok(StepOutcome {

@@ -67,7 +67,7 @@ pub(super) fn build_analysis(
             if steps == 0 {
                 return Err(c.invalid("analysis", None, "steps", "must be at least 1".into()));
             }
-            Ok((Analysis::Static { steps }, None, None))
+            Ok((Analysis::Static { steps, from: 0.0 }, None, None))
         }
     }
 }

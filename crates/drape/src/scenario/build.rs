@@ -5,15 +5,15 @@ use super::check::Checker;
 use super::contact::{build_contact, build_self_contact, check_initial_penetration};
 use super::material::{build_bending, build_material};
 use super::{
-    AnalysisKind, BoxSpec, Component, FixSpec, LoadKindSpec, LoadSpec, MeshShape, MeshSpec,
-    MonitorSpec, Scenario, ScenarioError, SolverSpec,
+    AnalysisKind, BoxSpec, Component, FixSpec, LoadKindSpec, LoadSpec, MAX_REFINE_LEVELS,
+    MeshShape, MeshSpec, MonitorSpec, RefineWhere, Scenario, ScenarioError, SolverSpec,
 };
 use crate::bending::BendingError;
 use crate::input::{InputFile, fnv1a};
 use crate::load::{Load, LoadKind};
 use crate::mesh::{ElementOrder, MAX_MESH_NODES, Mesh, MeshReadError, generate};
 use crate::model::{Model, ModelError};
-use crate::setup::{Monitor, Setup};
+use crate::setup::{Analysis, Monitor, Refine, Setup};
 use crate::solver::NewtonSettings;
 use std::path::{Path, PathBuf};
 
@@ -35,9 +35,50 @@ impl Scenario {
     pub fn build(&self, file: &Path, source: &str) -> Result<Setup, ScenarioError> {
         let c = Checker { file, source };
         let base = file.parent().map(Path::to_path_buf).unwrap_or_default();
-        let is_static = self.analysis.kind == AnalysisKind::Static;
         let mut inputs = Vec::new();
         let mesh = build_mesh(&c, &self.mesh, &base, &mut inputs)?;
+        let refine = build_refine(&c, self, &mesh)?;
+        let mut setup = self.build_on(file, source, mesh, inputs, None)?;
+        setup.refine = refine;
+        Ok(setup)
+    }
+
+    /// The setup of a finer level of the multilevel settle (`[refine]`):
+    /// the scenario built on `mesh` — a refinement of its own mesh — by
+    /// the one path every term follows (supports, loads and monitors
+    /// selected again on it), as a static analysis of one load increment
+    /// from the state carried over, which is near equilibrium at the full
+    /// load (the material as statics has it). The inputs recorded are
+    /// `inputs`, the coarse level's: the files a resume checks.
+    ///
+    /// # Errors
+    /// What [`Scenario::build`] finds on this mesh (its size, a selector
+    /// that selects nothing).
+    pub fn build_level(
+        &self,
+        file: &Path,
+        source: &str,
+        mesh: Mesh,
+        inputs: Vec<InputFile>,
+    ) -> Result<Setup, ScenarioError> {
+        let mut setup = self.build_on(file, source, mesh, Vec::new(), Some(1))?;
+        setup.inputs = inputs;
+        Ok(setup)
+    }
+
+    /// The setup on `mesh`; `statics`: a finer level's static settle in
+    /// that many increments, whatever the scenario's analysis.
+    fn build_on(
+        &self,
+        file: &Path,
+        source: &str,
+        mesh: Mesh,
+        mut inputs: Vec<InputFile>,
+        statics: Option<usize>,
+    ) -> Result<Setup, ScenarioError> {
+        let c = Checker { file, source };
+        let base = file.parent().map(Path::to_path_buf).unwrap_or_default();
+        let is_static = statics.is_some() || self.analysis.kind == AnalysisKind::Static;
         let (material, section, density) = build_material(&c, &self.material, is_static)?;
         check_moduli(&c, &self.material)?;
         let bending = build_bending(&c, &self.material)?;
@@ -51,7 +92,10 @@ impl Scenario {
         }
         let contact = build_contact(&c, self, &base, &mut inputs)?;
         let self_contact = build_self_contact(&c, self)?;
-        let (analysis, adaptive, rest) = build_analysis(&c, self)?;
+        let (mut analysis, mut adaptive, mut rest) = build_analysis(&c, self)?;
+        if let Some(steps) = statics {
+            (analysis, adaptive, rest) = (Analysis::Static { steps, from: 0.0 }, None, None);
+        }
         let mut newton = build_newton(&c, &self.solver)?;
         newton.projection = newton.projection.resolve(bending.is_some());
         if self.output.every == 0 {
@@ -112,8 +156,68 @@ impl Scenario {
             scenario_path: std::fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf()),
             scenario_hash: fnv1a(source.as_bytes()),
             inputs,
+            refine: None,
         })
     }
+}
+
+/// `[refine]`, each key in its range; refinement splits linear triangles
+/// only.
+fn build_refine(c: &Checker, s: &Scenario, mesh: &Mesh) -> Result<Option<Refine>, ScenarioError> {
+    let Some(r) = &s.refine else {
+        return Ok(None);
+    };
+    let t = "refine";
+    if !(1..=MAX_REFINE_LEVELS).contains(&r.levels) {
+        return Err(c.invalid(
+            t,
+            None,
+            "levels",
+            format!(
+                "must be 1 to {MAX_REFINE_LEVELS} (each level splits a triangle into four), not {}",
+                r.levels
+            ),
+        ));
+    }
+    if !(r.tolerance.is_finite() && r.tolerance >= 0.0) {
+        return Err(c.invalid(
+            t,
+            None,
+            "tolerance",
+            format!(
+                "must be a drape coefficient change >= 0, not {}",
+                r.tolerance
+            ),
+        ));
+    }
+    if !(r.fraction > 0.0 && r.fraction <= 1.0) {
+        return Err(c.invalid(
+            t,
+            None,
+            "fraction",
+            format!(
+                "must be in (0, 1] (the share of the curvature indicator the split triangles hold), not {}",
+                r.fraction
+            ),
+        ));
+    }
+    if mesh.order != ElementOrder::Linear {
+        return Err(c.invalid(
+            t,
+            None,
+            "levels",
+            format!(
+                "refinement splits linear triangles, and this mesh has order {} (mesh.order): refine a linear mesh",
+                mesh.order.degree()
+            ),
+        ));
+    }
+    Ok(Some(Refine {
+        levels: r.levels,
+        uniform: r.region == RefineWhere::All,
+        tolerance: r.tolerance,
+        fraction: r.fraction,
+    }))
 }
 
 /// `[solver]`: Newton's settings, each in its range (`linear` and

@@ -120,6 +120,9 @@ pub struct Scenario {
     /// Nodes whose positions go into the history (`[[monitor]]`).
     #[serde(default, rename = "monitor")]
     pub monitors: Vec<MonitorSpec>,
+    /// Refinement during the run (`[refine]`, none without it): the
+    /// multilevel settle.
+    pub refine: Option<RefineSpec>,
 }
 
 /// `[mesh]`: which mesh and of which order.
@@ -590,6 +593,59 @@ impl Default for OutputSpec {
 
 fn default_every() -> usize {
     10
+}
+
+/// `[refine]`: the multilevel settle. The scenario runs as written on
+/// its mesh (level 0); then, up to `levels` times, the mesh's triangles
+/// are split (`where`), the state carried onto the finer mesh and settled
+/// statically there at the full load, until the drape coefficient changes
+/// by less than `tolerance` between two levels.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RefineSpec {
+    /// How many times the triangles may be split (each split: one into
+    /// four), 1 to [`MAX_REFINE_LEVELS`]. Default 2.
+    #[serde(default = "default_levels")]
+    pub levels: usize,
+    /// `"all"` (every triangle) or `"folds"` (default: where the
+    /// curvature indicator says, with a conforming closure).
+    #[serde(default, rename = "where")]
+    pub region: RefineWhere,
+    /// Stop refining when the drape coefficient changes by less than this
+    /// between two levels, >= 0 (default 0.01); a run without a pedestal
+    /// refines `levels` times.
+    #[serde(default = "default_refine_tolerance")]
+    pub tolerance: f64,
+    /// `"folds"`: the triangles split are the fewest that hold this
+    /// share of the curvature indicator (Dörfler's bulk criterion), in
+    /// (0, 1]; default 0.7.
+    #[serde(default = "default_fraction")]
+    pub fraction: f64,
+}
+
+pub use crate::setup::MAX_REFINE_LEVELS;
+
+/// `[refine] where`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RefineWhere {
+    /// Every triangle.
+    All,
+    /// Where the folds are (the curvature indicator), closed conformingly.
+    #[default]
+    Folds,
+}
+
+fn default_levels() -> usize {
+    2
+}
+
+fn default_refine_tolerance() -> f64 {
+    0.01
+}
+
+fn default_fraction() -> f64 {
+    0.7
 }
 
 /// `[[monitor]]`.

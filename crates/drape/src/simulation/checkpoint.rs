@@ -60,6 +60,7 @@
 //! at the last frame's step; and, against the scenario
 //! ([`Checkpoint::read`]), the counters within its schedule.
 
+use super::summary::LevelRecord;
 use crate::contact::ContactState;
 use crate::contact::lagrange::MAX_ACTIVE_SET_ROUNDS;
 use crate::input::{InputFile, fnv1a};
@@ -70,7 +71,7 @@ use crate::solver::{KeptFactor, KeptLinear, KeptMultigrid, LinearStats};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"DRAPECKP";
-const VERSION: u32 = 7;
+const VERSION: u32 = 8;
 
 /// Longest key of an input file (bytes).
 const MAX_KEY_BYTES: usize = 256;
@@ -153,6 +154,117 @@ pub struct Checkpoint {
     /// built from (version 7; empty without one): a resumed run builds the
     /// same layout, so that it factorises on the same pattern.
     pub self_contact_layout: Vec<[usize; 4]>,
+    /// The multilevel settle so far (version 8; empty from an older
+    /// checkpoint or without `[refine]`): the refinements that made the
+    /// mesh the state lives on, and the levels finished.
+    pub levels: Levels,
+}
+
+/// The multilevel settle's record: what rebuilds the mesh of the level a
+/// run is on from the scenario's own (a resume replays the refinements,
+/// which are deterministic), and the levels finished.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Levels {
+    /// For each refinement so far, the elements of the mesh before it
+    /// that were marked for a red split (sorted).
+    pub marks: Vec<Vec<usize>>,
+    /// The levels finished, the coarse one first.
+    pub records: Vec<LevelRecord>,
+}
+
+/// The most elements one refinement may mark in a checkpoint (the node
+/// cap's triangles, twice over).
+const MAX_MARKS: usize = 2 * crate::mesh::MAX_MESH_NODES;
+
+/// Longest note of a level record (bytes).
+const MAX_NOTE_BYTES: usize = 1 << 16;
+
+/// Appends the levels section (version 8).
+fn write_levels(b: &mut Vec<u8>, levels: &Levels) {
+    let u = |b: &mut Vec<u8>, v: usize| b.extend_from_slice(&(v as u64).to_le_bytes());
+    u(b, levels.marks.len());
+    for marks in &levels.marks {
+        u(b, marks.len());
+        for &e in marks {
+            u(b, e);
+        }
+    }
+    u(b, levels.records.len());
+    for l in &levels.records {
+        for v in [l.elements, l.nodes, l.steps, l.newton_iterations] {
+            u(b, v);
+        }
+        b.extend_from_slice(&l.drape_coefficient.unwrap_or(f64::NAN).to_le_bytes());
+        b.extend_from_slice(&l.folds.map_or(u64::MAX, |f| f as u64).to_le_bytes());
+        b.extend_from_slice(&l.wall_seconds.to_le_bytes());
+        b.extend_from_slice(&l.time.to_le_bytes());
+        let note = l.note.as_deref().unwrap_or_default().as_bytes();
+        b.extend_from_slice(&(note.len() as u32).to_le_bytes());
+        b.extend_from_slice(note);
+    }
+}
+
+/// Reads what [`write_levels`] wrote.
+fn read_levels(r: &mut Reader) -> Result<Levels, CheckpointError> {
+    let refinements = r.usize("refinements")?;
+    if refinements > crate::setup::MAX_REFINE_LEVELS {
+        return Err(invalid(format!(
+            "{refinements} refinements, more than the {} a run may make",
+            crate::setup::MAX_REFINE_LEVELS
+        )));
+    }
+    let mut marks = Vec::with_capacity(refinements);
+    for i in 0..refinements {
+        let count = r.usize("marked elements")?;
+        if count > MAX_MARKS || count > r.remaining() / 8 {
+            return Err(invalid(format!(
+                "refinement {i} marks {count} elements, beyond the file"
+            )));
+        }
+        let list = (0..count)
+            .map(|_| r.usize("marked element"))
+            .collect::<Result<Vec<_>, _>>()?;
+        refuse(
+            list.windows(2).all(|w| w[0] < w[1]),
+            "its marked elements are not sorted".into(),
+        )?;
+        marks.push(list);
+    }
+    let count = r.usize("levels")?;
+    if count > refinements + 1 {
+        return Err(invalid(format!(
+            "{count} levels finished after {refinements} refinements"
+        )));
+    }
+    let mut records = Vec::with_capacity(count);
+    for _ in 0..count {
+        let (elements, nodes) = (r.usize("level elements")?, r.usize("level nodes")?);
+        let (steps, newton_iterations) = (r.usize("level steps")?, r.usize("level iterations")?);
+        let dc = r.f64("level drape coefficient")?;
+        let folds = r.u64("level folds")?;
+        let wall_seconds = r.f64("level wall seconds")?;
+        let time = r.f64("level time")?;
+        let note = r.bytes(MAX_NOTE_BYTES, "level note")?;
+        let note = String::from_utf8(note.to_vec())
+            .map_err(|_| invalid("a level's note is not UTF-8".into()))?;
+        refuse(
+            wall_seconds.is_finite() && wall_seconds >= 0.0,
+            "a level's wall time is not a time".into(),
+        )?;
+        refuse(time.is_finite(), "a level's time is not finite".into())?;
+        records.push(LevelRecord {
+            elements,
+            nodes,
+            drape_coefficient: Some(dc).filter(|d| !d.is_nan()),
+            folds: (folds != u64::MAX).then_some(folds as usize),
+            steps,
+            newton_iterations,
+            wall_seconds,
+            time,
+            note: (!note.is_empty()).then_some(note),
+        });
+    }
+    Ok(Levels { marks, records })
 }
 
 /// A checkpoint that cannot be used.
@@ -253,6 +365,7 @@ impl Checkpoint {
             }
             b.extend_from_slice(&input.hash.to_le_bytes());
         }
+        write_levels(&mut b, &self.levels);
         for v in [dofs as u64, nodes as u64, bodies as u64] {
             b.extend_from_slice(&v.to_le_bytes());
         }
@@ -365,6 +478,21 @@ impl Checkpoint {
         read_inputs(&mut r, version, most)
     }
 
+    /// The multilevel record a checkpoint holds, read from its header
+    /// alone (before the level's scenario is built: its refinements make
+    /// the mesh); empty for a version that did not record it.
+    pub fn recorded_levels(bytes: &[u8]) -> Result<Levels, CheckpointError> {
+        let (mut r, version) = open(bytes)?;
+        r.u64("scenario hash")?;
+        let most = r.remaining() / 16;
+        read_inputs(&mut r, version, most)?;
+        if version >= 8 {
+            read_levels(&mut r)
+        } else {
+            Ok(Levels::default())
+        }
+    }
+
     /// Compares the recorded input files with the scenario's `current`
     /// ones, in order: the first whose bytes differ is refused by name.
     fn check_inputs(recorded: &[InputFile], current: &[InputFile]) -> Result<(), CheckpointError> {
@@ -400,6 +528,11 @@ impl Checkpoint {
         if let (Some(recorded), Some(current)) = (&inputs, expected.inputs) {
             Self::check_inputs(recorded, current)?;
         }
+        let levels = if version >= 8 {
+            read_levels(&mut r)?
+        } else {
+            Levels::default()
+        };
         let (dofs, bodies) = (expected.dofs, expected.bodies);
         let (d, nodes, b) = (r.usize("dofs")?, r.usize("nodes")?, r.usize("bodies")?);
         if d != dofs || nodes.checked_mul(3) != Some(dofs) || b != bodies {
@@ -529,6 +662,7 @@ impl Checkpoint {
             frames,
             kept_linear,
             self_contact_layout,
+            levels,
         };
         ck.check_values()?;
         Ok(ck)
@@ -671,7 +805,14 @@ impl Checkpoint {
         if adaptive {
             self.fits_adaptive(&segments, slack, halvings)?;
         } else {
-            self.fits_fixed(&segments, end_time, halvings)?;
+            // A finer level of a multilevel settle counts its load from
+            // the coarser level's end, and its steps after theirs.
+            let from = match setup.analysis {
+                Analysis::Static { from, .. } => from,
+                Analysis::Dynamic { .. } => 0.0,
+            };
+            let before: usize = self.levels.records.iter().map(|r| r.steps).sum();
+            self.fits_fixed(&segments, (from, end_time), before, halvings)?;
         }
         if setup.rest.is_none() {
             refuse(
@@ -757,11 +898,20 @@ impl Checkpoint {
     fn fits_fixed(
         &self,
         segments: &[(usize, f64)],
-        end_time: f64,
+        (from, end_time): (f64, f64),
+        before: usize,
         halvings: usize,
     ) -> Result<(), CheckpointError> {
         let c = &self.counters;
         let time = self.state.time;
+        refuse(
+            c.step >= before,
+            format!(
+                "converged steps {} fewer than the {before} of the levels finished",
+                c.step
+            ),
+        )?;
+        let steps = c.step - before;
         let total: usize = segments.iter().map(|(n, _)| n).sum();
         refuse(
             c.scheduled_done <= total,
@@ -772,10 +922,10 @@ impl Checkpoint {
         )?;
         let per_step = 1usize.checked_shl(halvings as u32).unwrap_or(usize::MAX);
         refuse(
-            c.step >= c.scheduled_done && c.step <= c.scheduled_done.saturating_mul(per_step),
+            steps >= c.scheduled_done && steps <= c.scheduled_done.saturating_mul(per_step),
             format!(
-                "converged steps {} do not fit {} scheduled steps done (each 1 to 2^{halvings} steps)",
-                c.step, c.scheduled_done
+                "converged steps {steps} do not fit {} scheduled steps done (each 1 to 2^{halvings} steps)",
+                c.scheduled_done
             ),
         )?;
         refuse(
@@ -788,7 +938,7 @@ impl Checkpoint {
         )?;
         // The time the scheduled steps done reach.
         let mut left = c.scheduled_done;
-        let mut reached = 0.0;
+        let mut reached = from;
         for (n, dt) in segments {
             let k = left.min(*n);
             reached += k as f64 * dt;
@@ -1112,6 +1262,20 @@ mod tests {
             } else {
                 Vec::new()
             },
+            levels: Levels {
+                marks: vec![vec![0, 2, 5]],
+                records: vec![LevelRecord {
+                    elements: 8,
+                    nodes: 9,
+                    drape_coefficient: Some(0.5),
+                    folds: Some(6),
+                    steps: 3,
+                    newton_iterations: 17,
+                    wall_seconds: 1.25,
+                    time: 0.75,
+                    note: None,
+                }],
+            },
         }
     }
 
@@ -1119,6 +1283,13 @@ mod tests {
     /// checksum.
     fn layout_len(c: &Checkpoint) -> usize {
         8 + 32 * c.self_contact_layout.len()
+    }
+
+    /// The bytes of `c`'s levels (version 8), after the input files.
+    fn levels_len(c: &Checkpoint) -> usize {
+        let mut b = Vec::new();
+        write_levels(&mut b, &c.levels);
+        b.len()
     }
 
     fn bodies(c: &Checkpoint) -> usize {
@@ -1186,6 +1357,23 @@ mod tests {
     /// persistence too).
     fn as_version(c: &Checkpoint, version: u32) -> Vec<u8> {
         let bytes = c.to_bytes();
+        // Version 7: without the levels, after the input files.
+        let mut at = 8 + 4 + 8 + 8;
+        for _ in c.inputs.iter().flatten() {
+            for _ in 0..2 {
+                let n = u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+                at += 4 + n as usize;
+            }
+            at += 8;
+        }
+        let mut levels = Vec::new();
+        write_levels(&mut levels, &c.levels);
+        let mut v7 = bytes[..at].to_vec();
+        v7.extend_from_slice(&bytes[at + levels.len()..bytes.len() - 8]);
+        let bytes = seal(v7, 7);
+        if version == 7 {
+            return bytes;
+        }
         let v6 = bytes.len() - 8 - layout_len(c);
         if version == 6 {
             return seal(bytes[..v6].to_vec(), 6);
@@ -1251,6 +1439,14 @@ mod tests {
     fn reads_versions_1_to_6_with_defaults_for_the_new_fields() {
         let c = sample(true);
         let mut expected = c.clone();
+        // Version 7: no levels.
+        expected.levels = Levels::default();
+        let v7 = Checkpoint::from_bytes(&as_version(&c, 7), 6, 2, 0xdead_beef).unwrap();
+        assert_eq!(v7, expected);
+        assert_eq!(
+            Checkpoint::recorded_levels(&c.to_bytes()).unwrap(),
+            c.levels
+        );
         // Version 6: no self-contact layout.
         expected.self_contact_layout = Vec::new();
         let v6 = Checkpoint::from_bytes(&as_version(&c, 6), 6, 2, 0xdead_beef).unwrap();
@@ -1378,18 +1574,18 @@ mod tests {
         // (A file without contact, its header's bodies made 2.)
         let mut none = sample(false).to_bytes();
         none.truncate(none.len() - 8);
-        let bodies_at = 8 + 4 + 8 + 8 + (4 + 9 + 4 + 25 + 8) + 16;
+        let bodies_at = 8 + 4 + 8 + 8 + (4 + 9 + 4 + 25 + 8) + levels_len(&sample(false)) + 16;
         none[bodies_at..bodies_at + 8].copy_from_slice(&2u64.to_le_bytes());
         let e = Checkpoint::from_bytes(&seal(none, VERSION), 6, 2, 0xdead_beef).unwrap_err();
         assert!(e.to_string().contains("contact flag 0"), "{e}");
         // A later version is refused by name.
         let mut later = sample(true).to_bytes();
         later.truncate(later.len() - 8);
-        let later = seal(later, 8);
+        let later = seal(later, 9);
         let e = Checkpoint::from_bytes(&later, 6, 2, 0xdead_beef).unwrap_err();
         assert!(
             e.to_string()
-                .contains("version 8, this drape reads versions 1 to 7"),
+                .contains("version 9, this drape reads versions 1 to 8"),
             "{e}"
         );
     }
@@ -1458,7 +1654,7 @@ mod tests {
             "frame count 9223372036854775807 beyond the file",
         );
         // A sealed file cut in the positions.
-        let header = 8 + 4 + 8 + 8 + (4 + 9 + 4 + 25 + 8) + 24;
+        let header = 8 + 4 + 8 + 8 + (4 + 9 + 4 + 25 + 8) + levels_len(&c) + 24;
         let counters = 8 * 12;
         // Time, external work, persistence, friction dissipation and the
         // linear solver's 7 counts.

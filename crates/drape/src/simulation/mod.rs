@@ -40,7 +40,7 @@ use crate::output::atomic::write_atomic;
 use crate::output::history::HistoryWriter;
 use crate::setup::{Analysis, Setup};
 use crate::solver::{LinearMode, NewtonError};
-pub use checkpoint::{Checkpoint, CheckpointError, Counters};
+pub use checkpoint::{Checkpoint, CheckpointError, Counters, Levels};
 use frames::Snapshot;
 use schedule::{RestWatch, StepController, fastest_node};
 pub use session::{Explained, Front, Session};
@@ -48,9 +48,9 @@ use start::Start;
 pub use start::{ResumeError, SetupError, check_resume_inputs};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-pub use summary::Summary;
 use summary::record_failure;
 use summary::{Figures, initial_summary, summary, write_summary};
+pub use summary::{LevelRecord, Summary};
 pub use warnings::{MAX_MOTION_PER_STEP, warnings};
 
 /// What the observer hears after each converged step.
@@ -149,6 +149,18 @@ pub enum RunError {
         error: ResumeError,
         /// Whose user reads it ([`RunControl::front`]).
         front: Front,
+    },
+    /// A finer level of the multilevel settle could not be made (the mesh
+    /// refined, or the scenario built on it); the coarser levels' outputs
+    /// stay.
+    #[error("cannot make refinement level {level}: {reason}. The last level's state is in {out}")]
+    Refine {
+        /// The level (1: the first refinement).
+        level: usize,
+        /// Why.
+        reason: String,
+        /// Output directory.
+        out: PathBuf,
     },
     /// The run failed, and `summary.json` could not say so either.
     #[error("{cause}; summary.json could not be written either: {error}")]
@@ -270,6 +282,7 @@ pub fn history_columns(setup: &Setup) -> Vec<String> {
             "membrane_energy",
             "bending_energy",
             "friction_dissipation",
+            "elements",
         ]
         .map(String::from),
     );
@@ -319,6 +332,7 @@ impl History<'_> {
             r.energies.membrane,
             r.energies.bending,
             state.friction_dissipation,
+            model.mesh().element_count() as f64,
         ]);
         let path = self.writer.path().to_path_buf();
         self.writer.write_row(&row).map_err(io_err(&path))?;
@@ -369,16 +383,68 @@ pub fn run_with(
     observer: &mut dyn FnMut(&StepInfo),
     control: RunControl,
 ) -> Result<Summary, RunError> {
+    run_level(setup, out, observer, control, None, &Levels::default()).map(|f| f.summary)
+}
+
+/// A finer level's start in a multilevel settle (`crate::levels`): the
+/// state carried onto the level's mesh, and what the run has done so far.
+#[derive(Debug, Clone)]
+pub struct LevelStart {
+    /// The state on the level's mesh, at rest, its time the coarser
+    /// level's end (the static level's `from`).
+    pub state: State,
+    /// The run's counters so far; the level's schedule starts afresh.
+    pub counters: Counters,
+    /// The frames written so far, `(time, step)`.
+    pub written: Vec<(f64, usize)>,
+}
+
+/// How a session ended well: its summary, and where a next level starts
+/// from.
+#[derive(Debug)]
+pub struct Finished {
+    /// The summary written.
+    pub summary: Summary,
+    /// The last state.
+    pub state: State,
+    /// The counters at the end.
+    pub counters: Counters,
+    /// The frames written, `(time, step)`.
+    pub written: Vec<(f64, usize)>,
+}
+
+/// One session of a run: [`run_with`]'s, or — `level` given — a finer
+/// level of a multilevel settle, which goes on writing the history and
+/// the collection where the coarser level left them. `levels` is the
+/// multilevel record so far, which the checkpoints keep and the summary
+/// lists.
+pub fn run_level(
+    setup: &Setup,
+    out: &Path,
+    observer: &mut dyn FnMut(&StepInfo),
+    control: RunControl,
+    level: Option<LevelStart>,
+    levels: &Levels,
+) -> Result<Finished, RunError> {
     let mut recorded = false;
-    match run_session(setup, out, observer, control, &mut recorded) {
+    let leveled = level.is_some();
+    match run_session(
+        setup,
+        out,
+        observer,
+        control,
+        (level, levels),
+        &mut recorded,
+    ) {
         // The loop's own ends (a failed step, an I/O error while stepping,
         // an interruption) and a set-up that failed wrote their summary.
-        Ok(summary) => Ok(summary),
+        Ok(finished) => Ok(finished),
         Err(e @ (RunError::Resume { .. } | RunError::Io { .. })) if !recorded => {
             // A refused resume keeps the counts of the session before it
-            // (its history and checkpoint are left as they were); a fresh
-            // run that could not start records its initial state.
-            let previous = control.resume.then_some(());
+            // (its history and checkpoint are left as they were), as does
+            // a finer level that could not start; a fresh run that could
+            // not start records its initial state.
+            let previous = (control.resume || leveled).then_some(());
             let message = e.to_string();
             match record_failure(out, Some(setup), previous.is_some(), &message) {
                 Ok(()) => Err(e),
@@ -399,8 +465,9 @@ fn run_session(
     out: &Path,
     observer: &mut dyn FnMut(&StepInfo),
     control: RunControl,
+    (level, levels): (Option<LevelStart>, &Levels),
     recorded: &mut bool,
-) -> Result<Summary, RunError> {
+) -> Result<Finished, RunError> {
     let start = Instant::now();
     let model = &setup.model;
     std::fs::create_dir_all(out.join("fields")).map_err(io_err(out))?;
@@ -417,7 +484,9 @@ fn run_session(
         pvd,
         written,
         initial_frame,
-    } = if control.resume {
+    } = if let Some(level) = level {
+        start::level(setup, out, &mut ws, level)?
+    } else if control.resume {
         start::resume(setup, out, &mut ws, control.front)?
     } else {
         start::fresh(setup, out, &mut ws, &x, start)?
@@ -459,6 +528,7 @@ fn run_session(
             first_step_seconds: None,
             rest,
             observer,
+            levels,
         };
         // An output that cannot be written ends the run as a failed step
         // does: the summary says why.
@@ -511,6 +581,8 @@ struct Stepper<'a, 'scope> {
     first_step_seconds: Option<f64>,
     rest: Option<RestWatch>,
     observer: &'a mut dyn FnMut(&StepInfo),
+    /// The multilevel record so far (empty without `[refine]`).
+    levels: &'a Levels,
 }
 
 impl Stepper<'_, '_> {
@@ -695,6 +767,7 @@ impl Stepper<'_, '_> {
             frames: self.written.clone(),
             kept_linear: self.ws.newton.linear.kept(),
             self_contact_layout: self.ws.layout_stencils(),
+            levels: self.levels.clone(),
         };
         let path = checkpoint_path(self.out);
         write_atomic(&path, &ck.to_bytes()).map_err(io_err(&path))
@@ -729,7 +802,7 @@ impl Stepper<'_, '_> {
     }
 
     /// Writes the last frame and the summary once the loop has ended.
-    fn finish(mut self, end: End) -> Result<Summary, RunError> {
+    fn finish(mut self, end: End) -> Result<Finished, RunError> {
         let setup = self.setup;
         let interrupted = matches!(end, End::Interrupted);
         let output_start = Instant::now();
@@ -792,6 +865,7 @@ impl Stepper<'_, '_> {
         summary.first_step_seconds = self.first_step_seconds.unwrap_or(0.0);
         summary.linear = self.ws.newton.linear.stats;
         summary.first_contact_time = counters.first_contact_time;
+        summary.levels.clone_from(&self.levels.records);
         if interrupted {
             summary.status = "interrupted".into();
         }
@@ -817,9 +891,34 @@ impl Stepper<'_, '_> {
         match (failure, interruption) {
             (Some(e), _) => Err(e),
             (None, Some(message)) => Err(RunError::Interrupted { message }),
-            (None, None) => Ok(summary),
+            (None, None) => Ok(Finished {
+                summary,
+                state: self.state,
+                counters: Counters {
+                    wall_seconds: self.counters.wall_seconds + self.start.elapsed().as_secs_f64(),
+                    linear: self.ws.newton.linear.stats,
+                    ..self.counters
+                },
+                written: self.written,
+            }),
         }
     }
+}
+
+/// Writes `summary` to `out/summary.json` again (the multilevel settle's
+/// last word: the levels with the last one measured).
+///
+/// # Errors
+/// [`RunError::Io`].
+pub fn rewrite_summary(out: &Path, summary: &Summary) -> Result<(), RunError> {
+    write_summary(out, summary)
+}
+
+/// Records in `out/summary.json` that the run failed with `message`
+/// after what the summary there counts (a finer level that could not be
+/// made); best effort — the error itself is what the caller returns.
+pub fn record_level_failure(out: &Path, message: &str) {
+    let _ = summary::mark_failed(out, message);
 }
 
 /// The contact report of `state`, if the model has contact.
@@ -931,8 +1030,8 @@ fn advance(
         Analysis::Dynamic { newmark, .. } => {
             newmark.step(&setup.model, state, h, &setup.newton, length, ws)
         }
-        Analysis::Static { .. } => {
-            StaticStepper.step(&setup.model, state, h, &setup.newton, length, ws)
+        Analysis::Static { from, .. } => {
+            StaticStepper.step_from(*from, &setup.model, state, h, &setup.newton, length, ws)
         }
     }
 }

@@ -244,36 +244,14 @@ pub(super) fn resume<'a>(
             "its self-contact layout cannot be factorised on this model".into(),
         )));
     }
-    let entries = ck
-        .frames
-        .iter()
-        .map(|(t, k)| (*t, frame_relative_path(*k as u64)))
-        .collect();
-    let history_path = out.join("history.csv");
-    // The history's last row is the checkpoint's state until this
-    // session writes one.
-    let mut scratch = vec![0.0; setup.model.dofs()];
-    let kinetic = setup
-        .model
-        .kinetic_energy(&ck.state.velocities, &mut scratch);
-    let last = Figures::of(setup, &ck.state, kinetic, ck.counters.last_strain);
-    let history = History {
-        setup,
-        writer: HistoryWriter::resume(
-            &history_path,
-            &history_columns(setup),
-            ck.counters.step.saturating_add(1),
-        )
-        .map_err(|error| {
-            refused(ResumeError::History {
-                path: history_path.clone(),
+    let (history, pvd) =
+        going_on(setup, out, &ck.state, &ck.counters, &ck.frames).map_err(|e| match e {
+            GoingOn::History(error) => refused(ResumeError::History {
+                path: out.join("history.csv"),
                 error,
-            })
-        })?,
-        scratch,
-        last,
-    };
-    let pvd = PvdWriter::resume(out.join("fields.pvd"), entries).map_err(io_err(out))?;
+            }),
+            GoingOn::Collection(e) => e,
+        })?;
     Ok(Start {
         state: ck.state,
         counters: ck.counters,
@@ -283,6 +261,85 @@ pub(super) fn resume<'a>(
         written: ck.frames,
         initial_frame: None,
     })
+}
+
+/// A finer level's session of a multilevel settle: the carried state on
+/// the level's mesh (a static analysis: no external force yet, as a fresh
+/// static run has none), the history and the collection going on where
+/// the coarser level left them. Nothing is written until the level's
+/// first increment: its row and frame are the first on the new mesh.
+pub(super) fn level<'a>(
+    setup: &'a Setup,
+    out: &Path,
+    ws: &mut DynamicWorkspace,
+    level: super::LevelStart,
+) -> Result<Start<'a>, RunError> {
+    ws.f_ext.fill(0.0);
+    ws.newton.linear.stats = level.counters.linear;
+    let (history, pvd) = going_on(setup, out, &level.state, &level.counters, &level.written)
+        .map_err(|e| match e {
+            GoingOn::History(error) => io_err(&out.join("history.csv"))(error),
+            GoingOn::Collection(e) => e,
+        })?;
+    // The level's own schedule, from its start.
+    let counters = Counters {
+        scheduled_done: 0,
+        segment: 0,
+        step_size: 0.0,
+        still_steps: 0,
+        ..level.counters
+    };
+    Ok(Start {
+        state: level.state,
+        counters,
+        controller: None,
+        history,
+        pvd,
+        written: level.written,
+        initial_frame: None,
+    })
+}
+
+/// Why the outputs of a run cannot go on: the history (cut back to the
+/// rows so far), or the collection.
+enum GoingOn {
+    History(std::io::Error),
+    Collection(RunError),
+}
+
+/// The history and the collection of a run going on from `state` after
+/// `counters.step` steps with the frames `written`: the history cut back
+/// to its rows so far, its last row `state`'s until the session writes
+/// one; the collection listing `written`.
+fn going_on<'a>(
+    setup: &'a Setup,
+    out: &Path,
+    state: &State,
+    counters: &Counters,
+    written: &[(f64, usize)],
+) -> Result<(History<'a>, PvdWriter), GoingOn> {
+    let mut scratch = vec![0.0; setup.model.dofs()];
+    let kinetic = setup.model.kinetic_energy(&state.velocities, &mut scratch);
+    let last = Figures::of(setup, state, kinetic, counters.last_strain);
+    let writer = HistoryWriter::resume(
+        &out.join("history.csv"),
+        &history_columns(setup),
+        counters.step.saturating_add(1),
+    )
+    .map_err(GoingOn::History)?;
+    let history = History {
+        setup,
+        writer,
+        scratch,
+        last,
+    };
+    let entries = written
+        .iter()
+        .map(|(t, k)| (*t, frame_relative_path(*k as u64)))
+        .collect();
+    let pvd = PvdWriter::resume(out.join("fields.pvd"), entries)
+        .map_err(|e| GoingOn::Collection(io_err(out)(e)))?;
+    Ok((history, pvd))
 }
 
 /// A fresh session from the initial state `x` at rest (with its initial

@@ -89,6 +89,39 @@ pub struct Summary {
     /// there is nothing to warn about.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// The multilevel settle (`[refine]`): one entry per level finished,
+    /// the coarse one first; absent without `[refine]`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub levels: Vec<LevelRecord>,
+}
+
+/// One level of a multilevel settle, as `summary.json`'s `levels` lists
+/// it (SPEC §6.7: `elements`, `drape_coefficient`, `folds`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct LevelRecord {
+    /// Triangles of the level's mesh.
+    pub elements: usize,
+    /// Nodes of the level's mesh.
+    pub nodes: usize,
+    /// The drape coefficient of the level's last state, where the run
+    /// has a pedestal (and the measurement succeeded).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drape_coefficient: Option<f64>,
+    /// The folds counted on it, likewise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub folds: Option<usize>,
+    /// Steps of the level (converged history rows).
+    pub steps: usize,
+    /// Newton iterations of the level.
+    pub newton_iterations: usize,
+    /// Wall time of the level (s), its refinement and measurement included.
+    pub wall_seconds: f64,
+    /// The level's last time (s): a finer level's static load factor
+    /// counts from it.
+    pub time: f64,
+    /// Why the drape coefficient is absent, where it is.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
 }
 
 /// The figures of a state that a history row and the summary report.
@@ -127,6 +160,22 @@ impl Figures {
         figures.set(setup, state, kinetic, strain);
         figures
     }
+}
+
+/// Sets the status of the summary in `out` to `"failed"` with `message`,
+/// its counts kept — a completed coarser level's summary included (a
+/// finer level that could not be made: [`super::record_level_failure`]).
+pub(super) fn mark_failed(out: &Path, message: &str) -> std::io::Result<()> {
+    let path = out.join("summary.json");
+    let mut value = std::fs::read(&path)
+        .ok()
+        .and_then(|bytes| serde_json::from_slice::<serde_json::Value>(&bytes).ok())
+        .filter(serde_json::Value::is_object)
+        .unwrap_or_else(|| serde_json::json!({}));
+    value["status"] = "failed".into();
+    value["message"] = message.into();
+    let text = serde_json::to_string_pretty(&value).unwrap_or_default();
+    write_atomic(&path, text.as_bytes())
 }
 
 /// Records in `out/summary.json` that a run or a resume failed before its
@@ -238,6 +287,7 @@ pub(super) fn summary(
             .collect(),
         linear: Default::default(),
         warnings: warnings(setup),
+        levels: Vec::new(),
     }
 }
 

@@ -1,0 +1,172 @@
+//! Where to refine: the curvature of the current shape, element by
+//! element, and the elements that hold most of it.
+//!
+//! **The indicator** is the discrete shell's bending energy density
+//! without its rigidity (Grinspun, Hirani, Desbrun & Schröder 2003,
+//! "Discrete shells", SCA): an interior edge `e` between triangles `T_1`
+//! and `T_2` carries
+//!
+//! ```text
+//! E_e = theta_e^2 |e|^2 / (A_1 + A_2)
+//! ```
+//!
+//! with `theta_e` the angle between the triangles' current normals and
+//! `|e|`, `A_1`, `A_2` the reference edge length and areas; it tends to
+//! `(3/2) ∫ kappa_n^2 dA` over the edge's diamond, `kappa_n` the normal
+//! curvature across the edge, and does not depend on a bending model — a
+//! membrane without bending folds too. Each triangle holds half of each of
+//! its edges' `E_e`: `eta_T = sum_{e in T} E_e / 2`. A flat region holds
+//! nothing, a fold most; the measure is relative, so only the ratios
+//! between triangles matter.
+//!
+//! **Marking** is Dörfler's bulk criterion (Dörfler 1996, "A convergent
+//! adaptive algorithm for Poisson's equation", SIAM J. Numer. Anal. 33):
+//! the fewest triangles, largest indicator first, whose indicators sum to
+//! `fraction` of the total. Ties are broken by element index, so the
+//! marking depends on the state alone.
+
+use crate::mesh::Mesh;
+use crate::vec3::{cross, dot, norm, sub};
+use std::collections::HashMap;
+
+/// `eta_T` of every triangle of the linear mesh `mesh` at positions `y`
+/// (flat, 3 per node): the module docs.
+pub fn curvature_indicator(mesh: &Mesh, y: &[f64]) -> Vec<f64> {
+    let at = |a: usize| [y[3 * a], y[3 * a + 1], y[3 * a + 2]];
+    let triangles: Vec<[usize; 3]> = mesh.elements().map(|t| [t[0], t[1], t[2]]).collect();
+    let area = |t: &[usize; 3]| {
+        let [a, b, c] = t.map(|v| mesh.nodes[v]);
+        0.5 * norm(cross(sub(b, a), sub(c, a)))
+    };
+    let normal = |t: &[usize; 3]| {
+        let [a, b, c] = t.map(at);
+        let n = cross(sub(b, a), sub(c, a));
+        let r = norm(n);
+        if r > 0.0 { n.map(|v| v / r) } else { [0.0; 3] }
+    };
+    let mut beside: HashMap<(usize, usize), Vec<usize>> = HashMap::new();
+    for (e, t) in triangles.iter().enumerate() {
+        for m in 0..3 {
+            let (a, b) = (t[m], t[(m + 1) % 3]);
+            beside.entry((a.min(b), a.max(b))).or_default().push(e);
+        }
+    }
+    let mut eta = vec![0.0; triangles.len()];
+    // Each interior edge once, from its first triangle, in the order of
+    // the elements' edges: the sums do not depend on the map's order.
+    for (p, t) in triangles.iter().enumerate() {
+        for m in 0..3 {
+            let (a, b) = (t[m], t[(m + 1) % 3]);
+            let &[first, q] = beside[&(a.min(b), a.max(b))].as_slice() else {
+                continue; // a boundary (or non-manifold) edge bends nothing
+            };
+            if first != p {
+                continue;
+            }
+            let (np, nq) = (normal(&triangles[p]), normal(&triangles[q]));
+            let theta = norm(cross(np, nq)).atan2(dot(np, nq));
+            let d = sub(mesh.nodes[b], mesh.nodes[a]);
+            let areas = area(&triangles[p]) + area(&triangles[q]);
+            if areas > 0.0 {
+                let e = theta * theta * dot(d, d) / areas;
+                eta[p] += 0.5 * e;
+                eta[q] += 0.5 * e;
+            }
+        }
+    }
+    eta
+}
+
+/// Dörfler's marking: the fewest elements, largest `eta` first (ties by
+/// index), whose `eta` sum to at least `fraction` of the total; every
+/// element where the total is zero (nothing to tell them apart) or
+/// `fraction` is 1.
+pub fn dorfler(eta: &[f64], fraction: f64) -> Vec<bool> {
+    let total: f64 = eta.iter().sum();
+    if total <= 0.0 || total.is_nan() || fraction >= 1.0 {
+        return vec![true; eta.len()];
+    }
+    let mut order: Vec<usize> = (0..eta.len()).collect();
+    order.sort_by(|&i, &j| eta[j].total_cmp(&eta[i]).then(i.cmp(&j)));
+    let mut marked = vec![false; eta.len()];
+    let mut sum = 0.0;
+    for i in order {
+        if sum >= fraction * total {
+            break;
+        }
+        marked[i] = true;
+        sum += eta[i];
+    }
+    marked
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+
+    fn flat(mesh: &Mesh) -> Vec<f64> {
+        mesh.nodes.iter().flatten().copied().collect()
+    }
+
+    /// A flat sheet holds nothing; a sheet folded along a line holds it
+    /// all on the triangles that have an edge on the fold, as much on each
+    /// side, and the closed form.
+    #[test]
+    fn a_fold_holds_the_indicator() {
+        let mesh = generate::rectangle(
+            [1.0, 1.0],
+            [4, 4],
+            generate::Pattern::Right,
+            [0.5, 0.5, 0.0],
+            crate::mesh::ElementOrder::Linear,
+        );
+        let y = flat(&mesh);
+        assert!(curvature_indicator(&mesh, &y).iter().all(|&e| e == 0.0));
+        // Fold about the line x = 0.5 by 90 degrees: z = |x - 0.5|.
+        let y: Vec<f64> = mesh
+            .nodes
+            .iter()
+            .flat_map(|p| [p[0].min(0.5), p[1], (p[0] - 0.5).max(0.0)])
+            .collect();
+        let eta = curvature_indicator(&mesh, &y);
+        let centroid_x = |e: usize| {
+            let t = &mesh.connectivity[3 * e..3 * e + 3];
+            t.iter().map(|&a| mesh.nodes[a][0]).sum::<f64>() / 3.0
+        };
+        for (e, &v) in eta.iter().enumerate() {
+            let t = &mesh.connectivity[3 * e..3 * e + 3];
+            let on_fold = t.iter().filter(|&&a| mesh.nodes[a][0] == 0.5).count() == 2;
+            assert_eq!(v > 0.0, on_fold, "element {e}: {v}");
+        }
+        let left: f64 = (0..eta.len())
+            .filter(|&e| centroid_x(e) < 0.5)
+            .map(|e| eta[e])
+            .sum();
+        let right: f64 = (0..eta.len())
+            .filter(|&e| centroid_x(e) > 0.5)
+            .map(|e| eta[e])
+            .sum();
+        assert!((left - right).abs() < 1e-12 * left, "{left} {right}");
+        // Each of the 4 fold edges: a right angle, length 0.25, two
+        // triangles of 1/32 m² beside it.
+        let want = 4.0 * (std::f64::consts::FRAC_PI_2).powi(2) * 0.0625 / (2.0 / 32.0);
+        assert!(
+            (left + right - want).abs() < 1e-12 * want,
+            "{} {want}",
+            left + right
+        );
+    }
+
+    /// Dörfler marks the largest first until the share is reached, ties by
+    /// index; all where nothing tells the elements apart.
+    #[test]
+    fn dorfler_marks_the_fewest_that_hold_the_share() {
+        let eta = [1.0, 5.0, 0.0, 3.0, 1.0];
+        assert_eq!(dorfler(&eta, 0.5), [false, true, false, false, false]);
+        assert_eq!(dorfler(&eta, 0.6), [false, true, false, true, false]);
+        assert_eq!(dorfler(&eta, 0.85), [true, true, false, true, false]);
+        assert_eq!(dorfler(&eta, 1.0), [true; 5]);
+        assert_eq!(dorfler(&[0.0; 3], 0.5), [true; 3]);
+    }
+}

@@ -1,0 +1,268 @@
+//! The multilevel settle (`[refine]`, SPEC §6.7): decide the folds on a
+//! coarse mesh, refine where they are, finish each finer level statically
+//! from the coarser level's shape.
+//!
+//! Level 0 is the scenario as written (a dynamic fall to rest, or its
+//! static increments). Then, up to `[refine] levels` times: the level's
+//! last state is measured (the drape coefficient and the folds, where the
+//! scenario has a drape tester: [`crate::measure`]); its mesh is split —
+//! every triangle (`where = "all"`), or those that hold `fraction` of the
+//! curvature indicator ([`indicator`]), closed green so that no node
+//! hangs ([`crate::mesh::refine`]) —; the state is carried onto the new
+//! mesh with its new nodes on the surface ([`transfer`]); the scenario is
+//! built again on the new mesh, by the one path every term follows
+//! ([`Scenario::build_level`]: supports, loads, monitors, mass, bending
+//! patches, contact and the Hessian's layout all made from the mesh), as
+//! a static analysis of one load increment at the full load; and that
+//! level is settled. The run stops refining when the drape coefficient
+//! changes by less than `tolerance` between two levels.
+//!
+//! One output directory holds every level: the history goes on (its
+//! `elements` column says which mesh each row is on; a finer level's time
+//! is the coarser level's end plus its load factor, so that time rises),
+//! the frames go on in the same collection, each on its own mesh, and
+//! `summary.json` lists the levels. A checkpoint records the refinements
+//! (the elements each split marked), so that a resume builds the same
+//! meshes again and goes on bit for bit.
+
+pub mod indicator;
+pub mod transfer;
+
+use crate::integrator::State;
+use crate::measure::{DrapeTester, Given, Surface, measure};
+use crate::scenario::Scenario;
+use crate::setup::{Analysis, Setup};
+use crate::simulation::{
+    self, Checkpoint, LevelRecord, LevelStart, Levels, RunControl, RunError, StepInfo, Summary,
+    checkpoint_path,
+};
+use std::path::Path;
+use std::time::Instant;
+pub use transfer::{Transfer, TransferError};
+
+/// Runs `setup`, built from `scenario` (read from `file`, whose text is
+/// `source`), into `out`: as [`simulation::run_with`] does, and level by
+/// level where the scenario has `[refine]` (module docs).
+///
+/// # Errors
+/// Those of [`simulation::run_with`]; a level that cannot be built or
+/// refined is [`RunError::Refine`], recorded in the summary.
+pub fn run_with(
+    scenario: &Scenario,
+    (file, source): (&Path, &str),
+    setup: &Setup,
+    out: &Path,
+    observer: &mut dyn FnMut(&StepInfo),
+    control: RunControl,
+) -> Result<Summary, RunError> {
+    let Some(plan) = setup.refine else {
+        return simulation::run_with(setup, out, observer, control);
+    };
+    // A resume replays the refinements its checkpoint recorded; one that
+    // cannot be read is refused by the session, on the coarse setup.
+    let mut levels = if control.resume {
+        std::fs::read(checkpoint_path(out))
+            .ok()
+            .and_then(|bytes| Checkpoint::recorded_levels(&bytes).ok())
+            .unwrap_or_default()
+    } else {
+        Levels::default()
+    };
+    let coarse = setup.model.mesh();
+    let tester = DrapeTester::find(Some(scenario), coarse, 0.0, Given::default());
+    let mut mesh = coarse.clone();
+    for (k, marks) in levels.marks.iter().enumerate() {
+        let flags = flags_of(marks, mesh.element_count());
+        mesh = Transfer::new(&mesh, &flags)
+            .map_err(|e| refine_error(out, k + 1, e.to_string()))?
+            .refinement
+            .mesh;
+    }
+    let mut level: Option<Setup> = match levels.marks.len() {
+        0 => None,
+        k => {
+            let from = levels.records.get(k - 1).map_or(0.0, |r| r.time);
+            Some(build_level(
+                scenario,
+                (file, source),
+                setup,
+                mesh,
+                from,
+                out,
+                k,
+            )?)
+        }
+    };
+    let mut start: Option<LevelStart> = None;
+    let mut resume = control.resume;
+    loop {
+        let current = level.as_ref().unwrap_or(setup);
+        let session = RunControl { resume, ..control };
+        let finished =
+            simulation::run_level(current, out, observer, session, start.take(), &levels)?;
+        resume = false;
+        let since = Instant::now();
+        let k = levels.marks.len();
+        let model = &current.model;
+        // The level's share of the run's counts: what the levels before
+        // it did not (a resumed level's session started mid-level).
+        let done = |f: fn(&LevelRecord) -> usize| levels.records.iter().map(f).sum::<usize>();
+        let seconds: f64 = levels.records.iter().map(|r| r.wall_seconds).sum();
+        let mut record = LevelRecord {
+            elements: model.mesh().element_count(),
+            nodes: model.mesh().node_count(),
+            steps: finished.counters.step - done(|r| r.steps),
+            newton_iterations: finished.counters.iterations - done(|r| r.newton_iterations),
+            wall_seconds: (finished.counters.wall_seconds - seconds).max(0.0),
+            time: finished.state.time,
+            ..LevelRecord::default()
+        };
+        match &tester {
+            Ok(tester) => {
+                let positions: Vec<[f64; 3]> = finished
+                    .state
+                    .positions
+                    .chunks(3)
+                    .map(|p| [p[0], p[1], p[2]])
+                    .collect();
+                let surface = Surface {
+                    positions: &positions,
+                    connectivity: &model.mesh().connectivity,
+                    order: model.mesh().order,
+                };
+                match measure(&surface, tester) {
+                    Ok(m) => {
+                        record.drape_coefficient = Some(m.drape_coefficient);
+                        record.folds = Some(m.folds);
+                    }
+                    Err(e) => record.note = Some(format!("not measured: {e}")),
+                }
+            }
+            Err(e) => record.note = Some(format!("no drape coefficient: {e}")),
+        }
+        let change = match (levels.records.last(), record.drape_coefficient) {
+            (Some(previous), Some(dc)) => previous.drape_coefficient.map(|p| (dc - p).abs()),
+            _ => None,
+        };
+        record.wall_seconds += since.elapsed().as_secs_f64();
+        levels.records.push(record);
+        let converged = change.is_some_and(|c| c < plan.tolerance);
+        if k == plan.levels || converged {
+            let mut summary = finished.summary;
+            summary.levels.clone_from(&levels.records);
+            summary.wall_seconds += since.elapsed().as_secs_f64();
+            summary.message = format!("{}; {}", summary.message, says(&levels.records, converged));
+            simulation::rewrite_summary(out, &summary)?;
+            return Ok(summary);
+        }
+        // Refine, carry the state over, build the finer level.
+        let flags = if plan.uniform {
+            vec![true; model.mesh().element_count()]
+        } else {
+            let eta = indicator::curvature_indicator(model.mesh(), &finished.state.positions);
+            indicator::dorfler(&eta, plan.fraction)
+        };
+        let transfer = Transfer::new(model.mesh(), &flags)
+            .map_err(|e| refine_error(out, k + 1, e.to_string()))?;
+        levels
+            .marks
+            .push((0..flags.len()).filter(|&e| flags[e]).collect());
+        let fine = transfer.refinement.mesh.clone();
+        let next = build_level(
+            scenario,
+            (file, source),
+            setup,
+            fine,
+            finished.state.time,
+            out,
+            k + 1,
+        )?;
+        let state = carry(&next, &transfer, &finished.state);
+        let mut counters = finished.counters;
+        counters.wall_seconds += since.elapsed().as_secs_f64();
+        start = Some(LevelStart {
+            state,
+            counters,
+            written: finished.written,
+        });
+        level = Some(next);
+    }
+}
+
+/// One flag per element of a mesh of `count`, set where `marks` lists it.
+fn flags_of(marks: &[usize], count: usize) -> Vec<bool> {
+    let mut flags = vec![false; count];
+    for &e in marks {
+        if let Some(f) = flags.get_mut(e) {
+            *f = true;
+        }
+    }
+    flags
+}
+
+/// The setup of level `k` on `mesh`: the scenario built on it, static
+/// from the time `from`.
+fn build_level(
+    scenario: &Scenario,
+    (file, source): (&Path, &str),
+    coarse: &Setup,
+    mesh: crate::mesh::Mesh,
+    from: f64,
+    out: &Path,
+    k: usize,
+) -> Result<Setup, RunError> {
+    let mut setup = scenario
+        .build_level(file, source, mesh, coarse.inputs.clone())
+        .map_err(|e| refine_error(out, k, e.to_string()))?;
+    setup.analysis = Analysis::Static { steps: 1, from };
+    setup.refine = coarse.refine;
+    Ok(setup)
+}
+
+/// The state `coarse` carried onto `fine`'s mesh by `transfer`, at rest
+/// (a static level), its time, work and friction dissipation kept; a new
+/// node held by a support at its reference position.
+fn carry(fine: &Setup, transfer: &Transfer, coarse: &State) -> State {
+    let model = &fine.model;
+    let mut positions = transfer.carry(&coarse.positions);
+    let reference = model.initial_positions();
+    for (i, held) in model.fixed().iter().enumerate() {
+        if *held && i >= coarse.positions.len() {
+            positions[i] = reference[i];
+        }
+    }
+    let mut state = State::at_rest(model, positions);
+    state.time = coarse.time;
+    state.external_work = coarse.external_work;
+    state.friction_dissipation = coarse.friction_dissipation;
+    state
+}
+
+/// The summary's words on the levels: the drape coefficient per level, and
+/// why the refinement stopped.
+fn says(records: &[LevelRecord], converged: bool) -> String {
+    let dcs: Vec<String> = records
+        .iter()
+        .map(|r| match r.drape_coefficient {
+            Some(dc) => format!("{} T3: DC {dc:.4}", r.elements),
+            None => format!("{} T3", r.elements),
+        })
+        .collect();
+    let why = if converged {
+        "the drape coefficient changed by less than refine.tolerance"
+    } else {
+        "refine.levels reached"
+    };
+    format!("{} levels ({}); {why}", records.len(), dcs.join(", "))
+}
+
+/// A level that could not be made, recorded in the summary.
+fn refine_error(out: &Path, level: usize, reason: String) -> RunError {
+    let error = RunError::Refine {
+        level,
+        reason,
+        out: out.to_path_buf(),
+    };
+    simulation::record_level_failure(out, &error.to_string());
+    error
+}

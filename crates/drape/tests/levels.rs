@@ -1,0 +1,285 @@
+//! Issue 43: the multilevel settle (`[refine]`). A uniformly refined
+//! smooth problem lands where the run started on the fine mesh does; a
+//! refinement conserves mass, area and weight and leaves a state at rest
+//! unstrained; an interrupted multilevel run resumes across a refinement
+//! to the same history, byte for byte; bad `[refine]` keys are refused
+//! by name.
+
+mod common;
+
+use common::{assert_error, column, read_history, setup, temp_dir};
+use drape::levels::{self, Transfer};
+use drape::scenario::Scenario;
+use drape::simulation::{self, RunControl, RunError};
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// A clamped square membrane (0.3 m, `n` x `n` squares of T3) under 20
+/// Pa, run dynamically to rest; `refine`: a `[refine]` table to add. A
+/// uniform refinement of the `n` grid is the `2n` grid, node for node.
+fn inflated(n: usize, refine: &str) -> String {
+    format!(
+        r#"
+[mesh]
+shape = "rectangle"
+size = [0.3, 0.3]
+divisions = [{n}, {n}]
+[material]
+youngs_modulus = 2.0e6
+poisson_ratio = 0.3
+density = 320.0
+thickness = 0.6e-3
+[[load]]
+kind = "pressure"
+value = 20.0
+ramp = 0.1
+[[fix]]
+boundary = true
+[time]
+segments = [{{ steps = 30, dt = 2.0e-2 }}]
+[output]
+every = 1000
+[[monitor]]
+name = "center"
+at = [0.0, 0.0, 0.0]
+{refine}
+"#
+    )
+}
+
+/// Runs scenario `text` through the multilevel driver into `out`.
+fn run_levels(
+    text: &str,
+    out: &Path,
+    control: RunControl,
+    observer: &mut dyn FnMut(&simulation::StepInfo),
+) -> Result<simulation::Summary, RunError> {
+    let path = Path::new("test.toml");
+    let scenario = Scenario::parse(text, path).unwrap();
+    let s = scenario.build(path, text).unwrap();
+    levels::run_with(&scenario, (path, text), &s, out, observer, control)
+}
+
+/// A coarse square refined once everywhere and settled statically lands
+/// on the centre deflection of the run started on the twice finer grid,
+/// to well within the coarse grid's own discretisation error.
+#[test]
+fn a_uniformly_refined_run_matches_the_run_started_fine() {
+    let deflection = |text: &str| {
+        let dir = temp_dir("inflated");
+        let summary = run_levels(text, &dir, RunControl::default(), &mut |_| {}).unwrap();
+        (summary.monitors["center"][2], summary)
+    };
+    let (coarse, _) = deflection(&inflated(6, ""));
+    let (fine, _) = deflection(&inflated(12, ""));
+    let (refined, summary) = deflection(&inflated(6, "[refine]\nlevels = 1\nwhere = \"all\""));
+    assert_eq!(summary.levels.len(), 2, "{:?}", summary.levels);
+    assert_eq!(summary.levels[1].elements, 4 * summary.levels[0].elements);
+    assert_eq!(summary.elements, summary.levels[1].elements);
+    // No pedestal: no drape coefficient, said so.
+    assert!(summary.levels[0].drape_coefficient.is_none());
+    assert!(
+        summary.levels[0]
+            .note
+            .as_deref()
+            .unwrap()
+            .contains("no drape coefficient")
+    );
+    let error = (refined - fine).abs();
+    assert!(
+        error < 0.1 * (coarse - fine).abs(),
+        "coarse {coarse}, refined {refined}, fine {fine}"
+    );
+}
+
+/// The refined model has the coarse one's mass, area and weight to
+/// round-off (the children tile their parent on the flat reference), and
+/// a state that is its reference — flat, or a rigid motion of it — carried
+/// over is unstrained: no energy appears.
+#[test]
+fn a_refinement_conserves_mass_and_weight_and_leaves_rest_at_rest() {
+    let text = common::fabric(
+        "[[load]]\nkind = \"gravity\"\nacceleration = [0.0, 0.0, -9.81]\n\
+         [time]\nsegments = [{ steps = 1, dt = 1.0e-3 }]\n",
+    );
+    let path = Path::new("test.toml");
+    let scenario = Scenario::parse(&text, path).unwrap();
+    let coarse = scenario.build(path, &text).unwrap();
+    let mesh = coarse.model.mesh();
+    let marked: Vec<bool> = (0..mesh.element_count()).map(|e| e % 7 < 2).collect();
+    let transfer = Transfer::new(mesh, &marked).unwrap();
+    let fine = scenario
+        .build_level(path, &text, transfer.refinement.mesh.clone(), Vec::new())
+        .unwrap();
+    assert!(fine.model.mesh().element_count() > mesh.element_count());
+    let area = |m: &drape::mesh::Mesh| {
+        m.elements()
+            .map(|t| {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|v| m.nodes[v]);
+                let (u, v) = (
+                    [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+                    [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+                );
+                let n = [
+                    u[1] * v[2] - u[2] * v[1],
+                    u[2] * v[0] - u[0] * v[2],
+                    u[0] * v[1] - u[1] * v[0],
+                ];
+                0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+            })
+            .sum::<f64>()
+    };
+    let pairs = [
+        ("mass", coarse.model.total_mass(), fine.model.total_mass()),
+        ("area", area(coarse.model.mesh()), area(fine.model.mesh())),
+    ];
+    for (name, a, b) in pairs {
+        assert!((a - b).abs() <= 1e-13 * a, "{name}: {a} against {b}");
+    }
+    let weight = |s: &drape::setup::Setup| {
+        let mut f = vec![0.0; s.model.dofs()];
+        s.model.dead_forces(1.0, Some(1.0), &mut f);
+        f.chunks(3)
+            .fold([0.0; 3], |w, p| [w[0] + p[0], w[1] + p[1], w[2] + p[2]])
+    };
+    let (a, b) = (weight(&coarse), weight(&fine));
+    assert!(
+        (a[2] - b[2]).abs() <= 1e-13 * a[2].abs(),
+        "{a:?} against {b:?}"
+    );
+    // The reference moved rigidly, carried over: no strain.
+    let (c, s) = (0.8f64, 0.6f64);
+    let moved: Vec<f64> = coarse
+        .model
+        .initial_positions()
+        .chunks(3)
+        .flat_map(|p| [c * p[0] - s * p[2], p[1] + 0.1, s * p[0] + c * p[2] - 0.3])
+        .collect();
+    let carried = transfer.carry(&moved);
+    let strain = fine.model.strain_energy(&carried);
+    assert!(strain.abs() < 1e-18, "strain energy {strain} J");
+}
+
+/// The multilevel drape tester (`tests/scenarios/multilevel-tester.toml`:
+/// an 8-ring disc on a pedestal, its weight put on in 6 static
+/// increments, refined twice along its folds, checkpointing every step).
+fn tester() -> String {
+    std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenarios/multilevel-tester.toml"),
+    )
+    .unwrap()
+}
+
+/// The levels in the summary with a drape coefficient each, the history's
+/// `elements` rising level by level and its time rising; interrupted on
+/// the first refined level's step and resumed, the run ends with the
+/// uninterrupted run's history byte for byte.
+#[test]
+fn a_multilevel_settle_resumes_across_a_refinement_bit_for_bit() {
+    let text = tester();
+    let whole = temp_dir("levels-whole");
+    let summary = run_levels(&text, &whole, RunControl::default(), &mut |_| {}).unwrap();
+    assert_eq!(summary.levels.len(), 3, "{:?}", summary.levels);
+    for l in &summary.levels {
+        assert!(
+            l.drape_coefficient.is_some_and(|dc| dc > 0.0 && dc < 1.0),
+            "{l:?}"
+        );
+        assert!(l.folds.is_some(), "{l:?}");
+    }
+    assert!(
+        summary
+            .levels
+            .windows(2)
+            .all(|w| w[1].elements > w[0].elements)
+    );
+    let (header, rows) = read_history(&whole);
+    let elements = column(&header, &rows, "elements");
+    let time = column(&header, &rows, "time");
+    assert!(elements.windows(2).all(|w| w[1] >= w[0]), "{elements:?}");
+    assert!(time.windows(2).all(|w| w[1] > w[0]), "{time:?}");
+    assert_eq!(*elements.last().unwrap(), summary.levels[2].elements as f64);
+    // The initial row, the six increments, then each level's own (one,
+    // or more where its increment was cut back).
+    for l in &summary.levels[1..] {
+        let at = elements.iter().filter(|&&e| e == l.elements as f64).count();
+        assert_eq!(at, l.steps, "{l:?}");
+    }
+    assert_eq!(rows.len(), 1 + summary.steps);
+
+    // Stop after the first refined level's increment (step 7).
+    let cut = temp_dir("levels-cut");
+    let stop = AtomicBool::new(false);
+    let control = RunControl {
+        stop: Some(&stop),
+        ..RunControl::default()
+    };
+    let e = run_levels(&text, &cut, control, &mut |info| {
+        if info.step == 7 {
+            stop.store(true, Ordering::SeqCst);
+        }
+    })
+    .unwrap_err();
+    assert!(matches!(e, RunError::Interrupted { .. }), "{e}");
+    let control = RunControl {
+        resume: true,
+        ..RunControl::default()
+    };
+    let resumed = run_levels(&text, &cut, control, &mut |_| {}).unwrap();
+    assert_eq!(
+        std::fs::read(whole.join("history.csv")).unwrap(),
+        std::fs::read(cut.join("history.csv")).unwrap()
+    );
+    let dcs = |s: &simulation::Summary| {
+        s.levels
+            .iter()
+            .map(|l| (l.elements, l.drape_coefficient, l.folds, l.steps))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(dcs(&summary), dcs(&resumed));
+}
+
+/// Each key out of its range, and a mesh of order 2, refused by name.
+#[test]
+fn bad_refine_keys_are_refused_by_name() {
+    let base = common::fabric("[time]\nsegments = [{ steps = 1, dt = 1.0e-3 }]\n");
+    let lines = base.lines().count();
+    let at = |extra: &str, line: usize, key: &str, says: &[&str]| {
+        assert_error(
+            &format!("{base}\n[refine]\n{extra}\n"),
+            lines + 3 + line,
+            key,
+            says,
+        );
+    };
+    at(
+        "levels = 0",
+        0,
+        "refine.levels",
+        &["must be 1 to 4", "not 0"],
+    );
+    at("levels = 5", 0, "refine.levels", &["not 5"]);
+    at("tolerance = -0.1", 0, "refine.tolerance", &[">= 0", "-0.1"]);
+    at("fraction = 0.0", 0, "refine.fraction", &["(0, 1]", "not 0"]);
+    at("fraction = 1.5", 0, "refine.fraction", &["not 1.5"]);
+    let t6 = base.replace("[mesh]", "[mesh]\norder = 2");
+    let message = common::build(
+        &format!("{t6}\n[refine]\nlevels = 1\n"),
+        Path::new("test.toml"),
+    )
+    .unwrap_err();
+    assert!(
+        message.contains("refine.levels") && message.contains("linear triangles"),
+        "{message}"
+    );
+    let message = common::build(
+        &format!("{base}\n[refine]\nwhere = \"everywhere\"\n"),
+        Path::new("test.toml"),
+    )
+    .unwrap_err();
+    assert!(
+        message.contains("everywhere") && message.contains("all"),
+        "{message}"
+    );
+    let _ = setup(&format!("{base}\n[refine]\nlevels = 3\nwhere = \"all\"\n"));
+}
