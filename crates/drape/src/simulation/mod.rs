@@ -784,15 +784,25 @@ impl Stepper<'_, '_> {
                 out: self.out.to_path_buf(),
             };
         }
-        let statics = matches!(self.setup.analysis, Analysis::Static { .. });
+        let (statics, from) = match self.setup.analysis {
+            Analysis::Static { from, .. } => (true, from),
+            Analysis::Dynamic { .. } => (false, 0.0),
+        };
+        let level = self.levels.marks.len();
         RunError::Step {
             step: self.counters.step,
-            time: self.state.time,
+            // A static increment by its load factor.
+            time: self.state.time - from,
             dt: h,
             statics,
             cutbacks,
             cause,
-            hint: if statics {
+            hint: if statics && level > 0 {
+                format!(
+                    "; this is refinement level {level}'s settle from the coarser level's shape, one increment at the full load ({} Newton iterations at most, {} halvings): give it more ([solver] max_iterations, max_cutbacks), refine less at a time ([refine] fraction), or start from a finer coarse mesh",
+                    self.setup.newton.max_iterations, self.setup.max_cutbacks
+                )
+            } else if statics {
                 static_hint(&self.setup.model, self.ws.friction_shortfall())
             } else {
                 self_contact_hint(self.setup)
