@@ -494,9 +494,32 @@ fn run_session(
     let rest = setup
         .rest
         .map(|criterion| RestWatch::new(criterion, counters.still_steps));
+    // A stop asked for inside a step reaches Newton through its interrupt,
+    // which a watcher sets from the run's stop flag (issue 46: a step that
+    // never ends held a Ctrl-C back for ever).
+    // A stop asked for before the loop starts reaches the first step.
+    let asked = control.stop.is_some_and(|s| s.load(Ordering::SeqCst));
+    let interrupt = std::sync::Arc::new(AtomicBool::new(asked));
+    let watching = AtomicBool::new(control.stop.is_some());
+    if control.stop.is_some() {
+        ws.newton.interrupt = Some(interrupt.clone());
+    }
     // The frames' thread borrows the model and the output directory; the
     // scope ends only when it has written every frame handed to it.
     std::thread::scope(|scope| {
+        let _unwatch = Unwatch(&watching);
+        if let Some(stop) = control.stop {
+            let (watching, interrupt) = (&watching, &interrupt);
+            scope.spawn(move || {
+                while watching.load(Ordering::SeqCst) {
+                    if stop.load(Ordering::SeqCst) {
+                        interrupt.store(true, Ordering::SeqCst);
+                        return;
+                    }
+                    std::thread::sleep(WATCH_INTERVAL);
+                }
+            });
+        }
         let mut frame_writer = match frames::spawn(scope, model, out, pvd) {
             Ok(w) => w,
             Err(e) => return Err(setup_failure(setup, out, start, SetupError::FrameThread(e))),
@@ -540,6 +563,19 @@ fn run_session(
         *recorded = true;
         run.finish(end)
     })
+}
+
+/// How often the watcher looks at the run's stop flag.
+const WATCH_INTERVAL: std::time::Duration = std::time::Duration::from_millis(20);
+
+/// Ends the stop flag's watcher when the session's scope ends, however
+/// it ends.
+struct Unwatch<'a>(&'a AtomicBool);
+
+impl Drop for Unwatch<'_> {
+    fn drop(&mut self) {
+        self.0.store(false, Ordering::SeqCst);
+    }
 }
 
 /// How the loop over the schedule ended.
@@ -600,12 +636,24 @@ impl Stepper<'_, '_> {
                 }
                 // Each scheduled step may be split into 2^k sub-steps.
                 let mut pending: Vec<(f64, usize)> = vec![(*dt, 0)];
+                let mut progressed = false;
                 while let Some((h, depth)) = pending.pop() {
                     match self.attempt(h) {
                         Ok(outcome) => {
+                            progressed = true;
                             if let Some(end) = self.record(&outcome, h, depth, k)? {
                                 return Ok(end);
                             }
+                        }
+                        Err(NewtonError::Interrupted { .. }) => {
+                            // A checkpoint records scheduled steps done:
+                            // at the scheduled step's start the state is
+                            // one; past its first sub-steps it is not, and
+                            // a resume goes on from the previous one.
+                            if !progressed {
+                                self.checkpoint()?;
+                            }
+                            return Ok(End::Interrupted);
                         }
                         Err(_) if depth < self.setup.max_cutbacks => {
                             pending.push((0.5 * h, depth + 1));
@@ -639,6 +687,10 @@ impl Stepper<'_, '_> {
                     if let Some(end) = self.between_steps(self.counters.step)? {
                         return Ok(end);
                     }
+                }
+                Err(NewtonError::Interrupted { .. }) => {
+                    self.checkpoint()?;
+                    return Ok(End::Interrupted);
                 }
                 Err(_) if controller.failed() => {}
                 Err(e) => {

@@ -175,6 +175,13 @@ pub struct NewtonReport {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum NewtonError {
+    /// Asked to stop (a signal) before the solve ended: not a failure of
+    /// the step, never cut back.
+    #[error("interrupted at iteration {iteration}")]
+    Interrupted {
+        /// Iteration.
+        iteration: usize,
+    },
     /// Out of iterations.
     #[error(
         "no convergence in {iterations} iterations (residual {residual:.3e}, relative increment {increment:.3e})"
@@ -300,6 +307,11 @@ pub struct NewtonWorkspace {
     unshifted: Vec<f64>,
     /// The projected Newton's state in the current solve.
     ppn: Progressive,
+    /// Set from outside (a signal, through the run's stop flag) to end a
+    /// solve at its next iteration or line-search trial with
+    /// [`NewtonError::Interrupted`] (issue 46: a step that never ends
+    /// must not hold a Ctrl-C back).
+    pub interrupt: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 /// The progressively projected Newton's state over one solve: the
@@ -309,6 +321,19 @@ pub struct NewtonWorkspace {
 struct Progressive {
     threshold: Option<f64>,
     flags: Vec<bool>,
+}
+
+/// What [`backtrack`] says when the workspace's interrupt stopped it.
+const INTERRUPTED: &str = "interrupted";
+
+/// [`NewtonError::Interrupted`] once the workspace's interrupt is set.
+fn interrupted(ws: &NewtonWorkspace, iteration: usize) -> Result<(), NewtonError> {
+    match &ws.interrupt {
+        Some(flag) if flag.load(std::sync::atomic::Ordering::Relaxed) => {
+            Err(NewtonError::Interrupted { iteration })
+        }
+        _ => Ok(()),
+    }
 }
 
 impl NewtonWorkspace {
@@ -343,6 +368,7 @@ impl NewtonWorkspace {
             diagonal: Vec::new(),
             unshifted: Vec::new(),
             ppn: Progressive::default(),
+            interrupt: None,
         }
     }
 }
@@ -644,6 +670,9 @@ fn backtrack(
             1.0 / 16.0
         };
     loop {
+        if interrupted(ws, 0).is_err() {
+            return Err(INTERRUPTED);
+        }
         for ((yi, y0), d) in y.iter_mut().zip(&ws.y_old).zip(&ws.dy) {
             *yi = y0 + alpha * d;
         }
@@ -762,6 +791,7 @@ pub fn solve(
     let mut increment = f64::INFINITY;
     loop {
         let it = report.iterations + report.chord_steps;
+        interrupted(ws, it)?;
         if ended(
             settings,
             it,
@@ -831,9 +861,14 @@ pub fn solve(
             residual,
             hessian_at_trial,
         )
-        .map_err(|why| NewtonError::NoAdmissibleStep {
-            iteration: report.iterations + 1,
-            why,
+        .map_err(|why| match why {
+            INTERRUPTED => NewtonError::Interrupted {
+                iteration: report.iterations + 1,
+            },
+            why => NewtonError::NoAdmissibleStep {
+                iteration: report.iterations + 1,
+                why,
+            },
         })?;
         report.residuals.push(residual);
         increment = alpha * increment_of(settings, &ws.dy, length);
