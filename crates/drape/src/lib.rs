@@ -37,5 +37,6 @@ pub mod scenario;
 pub mod setup;
 pub mod simulation;
 pub mod solver;
+pub mod specimen;
 pub mod vec3;
 pub mod vecn;

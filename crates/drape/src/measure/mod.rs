@@ -36,6 +36,7 @@
 //! output directory's reader of `drape-render`, the scenario with
 //! [`crate::scenario::Scenario::read`].
 
+pub mod ensemble;
 pub mod folds;
 pub mod shadow;
 pub mod tester;
@@ -143,6 +144,16 @@ impl Horizontal {
         self.origin
     }
 
+    /// The plane's first axis `e1`.
+    pub fn e1(&self) -> [f64; 3] {
+        self.e1
+    }
+
+    /// The plane's second axis `e2 = k × e1`.
+    pub fn e2(&self) -> [f64; 3] {
+        self.e2
+    }
+
     /// Plane coordinates `(e1 · (x − c), e2 · (x − c))` of `x`.
     pub fn project(&self, x: [f64; 3]) -> [f64; 2] {
         let d = vec3::sub(x, self.origin);
@@ -169,6 +180,9 @@ pub struct Measurement {
     /// [`crate::contact::proximity::crossings`], on the elements' linear
     /// sub-triangles).
     pub crossings: usize,
+    /// The shadow's outline in the plane's coordinates (m): its rings
+    /// ([`Shadow::outline`]), for a picture of it.
+    pub outline: Vec<Vec<[f64; 2]>>,
 }
 
 /// The drape coefficient `DC = (A − π r_p²) / (π R² − π r_p²)` of a shadow
@@ -207,6 +221,7 @@ pub fn measure(surface: &Surface, tester: &DrapeTester) -> Result<Measurement, M
         folds: count_folds(&profile),
         subdivisions: s.subdivisions,
         crossings: crossings_of(surface),
+        outline: s.outline,
     })
 }
 

@@ -4,6 +4,7 @@ use super::analysis::build_analysis;
 use super::check::Checker;
 use super::contact::{build_contact, build_self_contact, check_initial_penetration};
 use super::material::{build_bending, build_material};
+use super::specimen::apply_specimen;
 use super::{
     AnalysisKind, BoxSpec, Component, FixSpec, LoadKindSpec, LoadSpec, MeshShape, MeshSpec,
     MonitorSpec, Scenario, ScenarioError, SolverSpec,
@@ -38,9 +39,12 @@ impl Scenario {
         let is_static = self.analysis.kind == AnalysisKind::Static;
         let mut inputs = Vec::new();
         let mesh = build_mesh(&c, &self.mesh, &base, &mut inputs)?;
-        let (material, section, density) = build_material(&c, &self.material, is_static)?;
-        check_moduli(&c, &self.material)?;
-        let bending = build_bending(&c, &self.material)?;
+        // A drape test's specimen: its mesh wavy, its warp cut and turned.
+        let (mesh, turned) = apply_specimen(&c, self, mesh)?;
+        let material_spec = turned.as_ref().unwrap_or(&self.material);
+        let (material, section, density) = build_material(&c, material_spec, is_static)?;
+        check_moduli(&c, material_spec)?;
+        let bending = build_bending(&c, material_spec)?;
         let loads = (self.loads.iter().enumerate())
             .map(|(i, l)| build_load(&c, &mesh, i, l))
             .collect::<Result<Vec<_>, _>>()?;
@@ -113,6 +117,30 @@ impl Scenario {
             scenario_hash: fnv1a(source.as_bytes()),
             inputs,
         })
+    }
+}
+
+/// The scenario `table`'s file paths (`mesh.path` and each
+/// `obstacle[i].path`) joined to `folder` where relative, so that its
+/// text means the same wherever it is saved (a Python dict's scenario, a
+/// sweep's case, a drape test's specimen).
+pub fn absolute_paths(table: &mut toml::Table, folder: &Path) {
+    let join = |value: Option<&mut toml::Value>| {
+        if let Some(toml::Value::String(path)) = value
+            && Path::new(path.as_str()).is_relative()
+        {
+            *path = folder.join(path.as_str()).to_string_lossy().into_owned();
+        }
+    };
+    if let Some(toml::Value::Table(mesh)) = table.get_mut("mesh") {
+        join(mesh.get_mut("path"));
+    }
+    if let Some(toml::Value::Array(obstacles)) = table.get_mut("obstacle") {
+        for obstacle in obstacles {
+            if let toml::Value::Table(obstacle) = obstacle {
+                join(obstacle.get_mut("path"));
+            }
+        }
     }
 }
 

@@ -177,6 +177,14 @@ enum Elastic {
     Orthotropic(Box<Orthotropic>),
 }
 
+/// Whether the material has a warp: the orthotropic model, or a woven
+/// fabric's `bending_rigidity = { warp, weft }` (judged on what was
+/// written: `{ warp = 0, weft = 0 }` keeps its direction).
+pub(super) fn has_axis(m: &MaterialSpec) -> bool {
+    m.model == MaterialModel::Orthotropic
+        || matches!(m.bending_rigidity, Some(toml::Value::Table(_)))
+}
+
 /// `[material] warp_direction`, default `[1, 0, 0]`: finite and not zero.
 fn warp_direction(c: &Checker, m: &MaterialSpec) -> Result<[f64; 3], ScenarioError> {
     let t = "material";
@@ -313,10 +321,7 @@ pub(super) fn build_bending(
     };
     // Judged on what was written: a woven `{ warp = 0, weft = 0 }` is no
     // bending, but its warp direction is still in place.
-    if m.warp_direction.is_some()
-        && m.model != MaterialModel::Orthotropic
-        && !matches!(m.bending_rigidity, Some(toml::Value::Table(_)))
-    {
+    if m.warp_direction.is_some() && !has_axis(m) {
         return Err(c.invalid(
             t,
             None,

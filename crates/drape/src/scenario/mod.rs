@@ -25,14 +25,16 @@ mod contact;
 mod locate;
 mod material;
 mod obstacle;
+mod specimen;
 mod tagged;
 
-pub use build::read_mesh_file;
+pub use build::{absolute_paths, read_mesh_file};
 pub use contact::{ContactMethodName, ContactSpec, LagrangeSpec, PenaltySpec};
 pub use obstacle::{
     BoxObstacleSpec, CylinderObstacleSpec, MeshObstacleSpec, ObstacleShape, ObstacleSpec,
     PlaneObstacleSpec, SphereObstacleSpec,
 };
+pub use specimen::{Faces, SpecimenPlan, SpecimenSpec, TestSpec};
 
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -120,6 +122,11 @@ pub struct Scenario {
     /// Nodes whose positions go into the history (`[[monitor]]`).
     #[serde(default, rename = "monitor")]
     pub monitors: Vec<MonitorSpec>,
+    /// How the specimens of a drape test differ (`drape test`); a run
+    /// ignores it.
+    pub test: Option<TestSpec>,
+    /// This scenario is a specimen of a drape test, so perturbed.
+    pub specimen: Option<SpecimenSpec>,
 }
 
 /// `[mesh]`: which mesh and of which order.
