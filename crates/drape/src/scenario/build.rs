@@ -4,7 +4,7 @@ use super::analysis::build_analysis;
 use super::check::Checker;
 use super::contact::{build_contact, build_self_contact, check_initial_penetration};
 use super::material::{build_bending, build_material};
-use super::specimen::apply_specimen;
+use super::specimen::{make_wavy, specimen_of};
 use super::{
     AnalysisKind, BoxSpec, Component, FixSpec, LoadKindSpec, LoadSpec, MeshShape, MeshSpec,
     MonitorSpec, Scenario, ScenarioError, SolverSpec,
@@ -39,9 +39,13 @@ impl Scenario {
         let is_static = self.analysis.kind == AnalysisKind::Static;
         let mut inputs = Vec::new();
         let mesh = build_mesh(&c, &self.mesh, &base, &mut inputs)?;
-        // A drape test's specimen: its mesh wavy, its warp cut and turned.
-        let (mesh, turned) = apply_specimen(&c, self, mesh)?;
-        let material_spec = turned.as_ref().unwrap_or(&self.material);
+        // A drape test's specimen: its warp cut and turned over now, its
+        // mesh made wavy once the obstacles that hold it flat are known
+        // (its loads, supports and monitors are selected on the plain mesh).
+        let specimen = specimen_of(&c, self, &mesh)?;
+        let material_spec = (specimen.as_ref())
+            .and_then(|s| s.2.as_ref())
+            .unwrap_or(&self.material);
         let (material, section, density) = build_material(&c, material_spec, is_static)?;
         check_moduli(&c, material_spec)?;
         let bending = build_bending(&c, material_spec)?;
@@ -62,6 +66,10 @@ impl Scenario {
             return Err(c.invalid("output", None, "every", "must be at least 1".into()));
         }
         let monitors = build_monitors(&c, &mesh, &self.monitors)?;
+        let mut mesh = mesh;
+        if let Some((p, plane, _)) = &specimen {
+            make_wavy(&mut mesh, p, plane, contact.as_ref());
+        }
         check_memory(&c, &self.mesh, mesh.node_count())?;
         check_pattern_memory(&c, &self.mesh, &mesh, bending.is_some())?;
 

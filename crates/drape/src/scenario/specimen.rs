@@ -5,9 +5,10 @@
 use super::check::Checker;
 use super::material::has_axis;
 use super::{MaterialSpec, Scenario, ScenarioError};
+use crate::contact::ContactModel;
 use crate::mesh::Mesh;
 use crate::specimen::random::SplitMix64;
-use crate::specimen::{Face, Perturbation, perturb_mesh};
+use crate::specimen::{Face, Perturbation, SpecimenPlane, perturb_mesh};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -257,22 +258,22 @@ fn check_test(c: &Checker, t: &TestSpec, mesh: Option<&Mesh>) -> Result<(), Scen
     Ok(())
 }
 
-/// The scenario's `[test]` checked and its `[specimen]` applied to the
-/// built `mesh`: the mesh made wavy, and the material's warp direction cut
-/// and turned over (where the material has one). Without `[specimen]`, or
-/// with one that changes nothing, both are returned untouched.
-pub(super) fn apply_specimen(
+/// The scenario's `[test]` checked, and its `[specimen]`: the
+/// perturbation on the plane of `mesh`, with the material's warp
+/// direction cut and turned over (`None` where the material has no warp,
+/// or there is nothing to perturb).
+pub(super) fn specimen_of(
     c: &Checker,
     scenario: &Scenario,
-    mut mesh: Mesh,
-) -> Result<(Mesh, Option<MaterialSpec>), ScenarioError> {
+    mesh: &Mesh,
+) -> Result<Option<(Perturbation, SpecimenPlane, Option<MaterialSpec>)>, ScenarioError> {
     if let Some(t) = &scenario.test {
-        check_test(c, t, Some(&mesh))?;
+        check_test(c, t, Some(mesh))?;
     }
     let Some(s) = &scenario.specimen else {
-        return Ok((mesh, None));
+        return Ok(None);
     };
-    check_waviness(c, "specimen", s.waviness, s.waviness_modes, Some(&mesh))?;
+    check_waviness(c, "specimen", s.waviness, s.waviness_modes, Some(mesh))?;
     if !(s.cut_angle.is_finite() && (-90.0..=90.0).contains(&s.cut_angle)) {
         return Err(c.invalid(
             "specimen",
@@ -297,15 +298,34 @@ pub(super) fn apply_specimen(
         face: s.face,
     };
     if p.is_identity() {
-        return Ok((mesh, None));
+        return Ok(None);
     }
-    let plane = perturb_mesh(&mut mesh, &p)
+    let plane = SpecimenPlane::of(mesh)
         .map_err(|e| c.invalid("specimen", None, "waviness", e.to_string()))?;
     let m = &scenario.material;
-    if !has_axis(m) {
-        return Ok((mesh, None));
-    }
-    let mut turned = m.clone();
-    turned.warp_direction = Some(plane.turn(m.warp_direction.unwrap_or([1.0, 0.0, 0.0]), &p));
-    Ok((mesh, Some(turned)))
+    let turned = has_axis(m).then(|| {
+        let mut turned = m.clone();
+        turned.warp_direction = Some(plane.turn(m.warp_direction.unwrap_or([1.0, 0.0, 0.0]), &p));
+        turned
+    });
+    Ok(Some((p, plane, turned)))
+}
+
+/// `mesh` made wavy by `p`, held flat where a node starts within the
+/// waviness' amplitude of an obstacle of `contact` (the drape tester's
+/// grip), so that no node starts inside one.
+pub(super) fn make_wavy(
+    mesh: &mut Mesh,
+    p: &Perturbation,
+    plane: &SpecimenPlane,
+    contact: Option<&ContactModel>,
+) {
+    let held: Vec<bool> = (mesh.nodes.iter())
+        .map(|&x| {
+            contact.is_some_and(|c| {
+                (c.bodies.iter()).any(|b| b.proximity(x, 0.0, None).gap <= p.waviness)
+            })
+        })
+        .collect();
+    perturb_mesh(mesh, plane, p, &held);
 }

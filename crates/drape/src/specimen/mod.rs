@@ -9,7 +9,14 @@
 //! - **waviness**: the specimen does not lie perfectly flat; its reference
 //!   (stress-free) shape is offset along its plane's normal by a smooth
 //!   random field of a few low Fourier modes ([`waviness`]) whose largest
-//!   offset is the amplitude `A`;
+//!   offset is the amplitude `A`. Where the specimen is held flat — its
+//!   nodes within `A` of an obstacle, the drape tester's grip — the field
+//!   is zero, and it rises to its full value over the taper length
+//!   `ℓ = L / (2K)` (half the shortest wavelength) by a smoothstep of the
+//!   in-plane distance `d` from the nearest held node,
+//!   `s = 3 (d/ℓ)² − 2 (d/ℓ)³` (1 beyond `ℓ`): the specimen is pressed
+//!   flat in the grip, as in the instrument, and no node starts inside an
+//!   obstacle;
 //! - **the cut's angle to the warp**: the warp direction is turned by `θ`
 //!   about the plane's normal (counter-clockwise seen from it);
 //! - **the face**: a specimen face down is the face-up one turned over
@@ -128,8 +135,10 @@ impl SpecimenPlane {
     }
 
     /// The waviness' offset of every node of `mesh` along the normal (m):
-    /// `A f / max |f|`, face down `−A f(ξ, −η) / max |f|`.
-    pub fn offsets(&self, mesh: &Mesh, p: &Perturbation) -> Vec<f64> {
+    /// `A s f / max |s f|`, face down `f(ξ, η)` replaced by `−f(ξ, −η)`;
+    /// `s` the taper from the nodes `held` flat (see the module's
+    /// documentation; all 1 where none is held).
+    pub fn offsets(&self, mesh: &Mesh, p: &Perturbation, held: &[bool]) -> Vec<f64> {
         if p.waviness == 0.0 || self.half_size <= 0.0 {
             return vec![0.0; mesh.nodes.len()];
         }
@@ -138,10 +147,11 @@ impl SpecimenPlane {
             Face::Up => 1.0,
             Face::Down => -1.0,
         };
-        let raw: Vec<f64> = (mesh.nodes.iter())
-            .map(|&x| {
+        let taper = self.taper(mesh, held, self.half_size / (2.0 * p.modes as f64));
+        let raw: Vec<f64> = (mesh.nodes.iter().zip(taper))
+            .map(|(&x, s)| {
                 let [xi, eta] = self.plane.project(x);
-                sign * field.value([xi, sign * eta])
+                s * sign * field.value([xi, sign * eta])
             })
             .collect();
         let largest = raw.iter().fold(0.0f64, |m, f| m.max(f.abs()));
@@ -149,6 +159,40 @@ impl SpecimenPlane {
             return raw;
         }
         raw.iter().map(|f| p.waviness * f / largest).collect()
+    }
+
+    /// The smoothstep `s(d / ℓ)` of every node's in-plane distance `d`
+    /// from the nearest held node (0 at a held node, 1 with none held);
+    /// the distance is taken to the held nodes that share an element with
+    /// a free one, which are the nearest held nodes of every free node
+    /// outside the held region.
+    fn taper(&self, mesh: &Mesh, held: &[bool], length: f64) -> Vec<f64> {
+        let n = mesh.order.nodes_per_element();
+        let mut edge = vec![false; mesh.nodes.len()];
+        for el in mesh.connectivity.chunks_exact(n) {
+            if el.iter().any(|&a| held[a]) && el.iter().any(|&a| !held[a]) {
+                for &a in el.iter().filter(|&&a| held[a]) {
+                    edge[a] = true;
+                }
+            }
+        }
+        let rim: Vec<[f64; 2]> = (mesh.nodes.iter().zip(&edge))
+            .filter(|(_, e)| **e)
+            .map(|(&x, _)| self.plane.project(x))
+            .collect();
+        (mesh.nodes.iter().zip(held))
+            .map(|(&x, &h)| {
+                if h {
+                    return 0.0;
+                }
+                let [xi, eta] = self.plane.project(x);
+                let d = (rim.iter())
+                    .map(|r| (r[0] - xi).hypot(r[1] - eta))
+                    .fold(f64::INFINITY, f64::min);
+                let u = (d / length).min(1.0);
+                u * u * (3.0 - 2.0 * u)
+            })
+            .collect()
     }
 
     /// `d` cut at `θ` (turned about the normal) and, face down, turned over
@@ -172,20 +216,16 @@ impl SpecimenPlane {
     }
 }
 
-/// `mesh` with the waviness of `p` in its initial positions.
-///
-/// # Errors
-/// A mesh without a plane ([`SpecimenPlane::of`]).
-pub fn perturb_mesh(mesh: &mut Mesh, p: &Perturbation) -> Result<SpecimenPlane, SpecimenError> {
-    let plane = SpecimenPlane::of(mesh)?;
+/// `mesh` with the waviness of `p` in its initial positions, zero at the
+/// nodes `held` flat and tapered from them.
+pub fn perturb_mesh(mesh: &mut Mesh, plane: &SpecimenPlane, p: &Perturbation, held: &[bool]) {
     if p.waviness != 0.0 {
         let k = plane.plane.vertical();
-        let offsets = plane.offsets(mesh, p);
+        let offsets = plane.offsets(mesh, p, held);
         for (x, w) in mesh.nodes.iter_mut().zip(offsets) {
             *x = vec3::add(*x, vec3::scale(k, w));
         }
     }
-    Ok(plane)
 }
 
 #[cfg(test)]
@@ -212,7 +252,13 @@ mod tests {
     fn amplitude_is_the_largest_offset() {
         let flat = disc();
         let mut wavy = flat.clone();
-        perturb_mesh(&mut wavy, &perturbation(Face::Up)).unwrap();
+        let plane = SpecimenPlane::of(&flat).unwrap();
+        perturb_mesh(
+            &mut wavy,
+            &plane,
+            &perturbation(Face::Up),
+            &vec![false; flat.nodes.len()],
+        );
         let mut largest: f64 = 0.0;
         for (a, b) in flat.nodes.iter().zip(&wavy.nodes) {
             assert_eq!((a[0], a[1]), (b[0], b[1]));
@@ -228,8 +274,9 @@ mod tests {
     fn face_down_is_face_up_turned_over() {
         let mesh = disc();
         let plane = SpecimenPlane::of(&mesh).unwrap();
-        let up = plane.offsets(&mesh, &perturbation(Face::Up));
-        let down = plane.offsets(&mesh, &perturbation(Face::Down));
+        let free = vec![false; mesh.nodes.len()];
+        let up = plane.offsets(&mesh, &perturbation(Face::Up), &free);
+        let down = plane.offsets(&mesh, &perturbation(Face::Down), &free);
         for (i, x) in mesh.nodes.iter().enumerate() {
             let j = (mesh.nodes.iter())
                 .position(|y| (y[0] - x[0]).abs() < 1e-12 && (y[1] + x[1]).abs() < 1e-12)
@@ -237,6 +284,55 @@ mod tests {
             // The two fields are scaled by the same max |f| (the node set
             // is mirror symmetric), so they agree to round-off.
             assert!((down[i] + up[j]).abs() < 1e-15, "node {i}");
+        }
+    }
+
+    /// Held nodes stay where they are; the others are `A s f / max |s f|`
+    /// with the smoothstep `s` of their distance from the held disc's rim
+    /// (K = 1: ℓ = L / 2 = 0.075 m; the 6-ring disc's rings lie 0.025 m
+    /// apart, the held ones at 0.025 and 0.05 m).
+    #[test]
+    fn held_nodes_stay_flat() {
+        let mesh = disc();
+        let plane = SpecimenPlane::of(&mesh).unwrap();
+        let held: Vec<bool> = mesh.nodes.iter().map(|x| x[0].hypot(x[1]) < 0.06).collect();
+        let p = Perturbation {
+            modes: 1,
+            ..perturbation(Face::Up)
+        };
+        let w = plane.offsets(&mesh, &p, &held);
+        let f = Waviness::new(p.seed, 1, 0.15);
+        let step = |d: f64| {
+            let u = (d / 0.075).min(1.0);
+            u * u * (3.0 - 2.0 * u)
+        };
+        let sf: Vec<f64> = (mesh.nodes.iter().zip(&held))
+            .map(|(x, &h)| {
+                let r = x[0].hypot(x[1]);
+                // The nearest held node of a node on ring r lies on the
+                // rim ring 0.05 at the node's own angle (6k nodes a ring:
+                // ring 2's angles are among ring k's for even k, and the
+                // distance is r − 0.05 to round-off for those).
+                if h {
+                    0.0
+                } else {
+                    step(r - 0.05) * f.value([x[0], x[1]])
+                }
+            })
+            .collect();
+        let largest = sf.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        for (i, x) in mesh.nodes.iter().enumerate() {
+            let on_rim_angle = {
+                let a = x[1].atan2(x[0]).rem_euclid(std::f64::consts::TAU);
+                let k = a / (std::f64::consts::TAU / 12.0);
+                (k - k.round()).abs() < 1e-9
+            };
+            if held[i] {
+                assert_eq!(w[i], 0.0);
+            } else if on_rim_angle {
+                let expected = p.waviness * sf[i] / largest;
+                assert!((w[i] - expected).abs() < 1e-9 * p.waviness, "node {i}");
+            }
         }
     }
 
