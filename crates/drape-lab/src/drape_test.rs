@@ -188,7 +188,18 @@ pub fn report(out: &Path, test: &TestInfo, outcomes: &[Outcome]) -> anyhow::Resu
                 }
             }
         }
-        let wall = summary(&dir).map_or(Value::Null, |s| s["wall_seconds"].clone());
+        let run_summary = summary(&dir);
+        let wall = run_summary
+            .as_ref()
+            .map_or(Value::Null, |s| s["wall_seconds"].clone());
+        if status == "completed" {
+            // The run's own words ("at rest ...", "completed N steps"),
+            // whichever front end ran it.
+            message = (run_summary.as_ref())
+                .and_then(|s| s["message"].as_str())
+                .unwrap_or_default()
+                .to_string();
+        }
         rows.push(json!({
             "specimen": plan.index,
             "status": status,

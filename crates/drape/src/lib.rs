@@ -20,6 +20,7 @@ pub mod block3;
 pub mod contact;
 pub mod element;
 pub mod fd;
+pub mod horizontal;
 pub mod human;
 pub mod input;
 pub mod integrator;

@@ -34,7 +34,7 @@
 pub mod random;
 pub mod waviness;
 
-use crate::measure::Horizontal;
+use crate::horizontal::Horizontal;
 use crate::mesh::Mesh;
 use crate::vec3;
 use waviness::Waviness;
