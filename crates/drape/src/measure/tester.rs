@@ -209,7 +209,7 @@ impl DrapeTester {
 /// [`MeasureError::NoVertical`] where `w` is not finite, or
 /// `|w| <= CANCEL_TOLERANCE · Σ |w_i|` (the loads weigh nothing or cancel).
 pub fn vertical_of(scenario: &Scenario) -> Result<[f64; 3], MeasureError> {
-    let mass_per_area = scenario.material.density * scenario.material.thickness;
+    let mass_per_area = scenario.material.density() * scenario.material.thickness();
     let weights: Vec<[f64; 3]> = scenario
         .loads
         .iter()

@@ -75,11 +75,11 @@ pub(super) fn build_material(
             Elastic::Orthotropic(Box::new(material))
         }
     };
-    let thickness = c.positive(t, None, "thickness", m.thickness)?;
-    let density = if is_static && m.density == 0.0 {
+    let thickness = c.positive(t, None, "thickness", m.thickness())?;
+    let density = if is_static && m.density() == 0.0 {
         0.0
     } else {
-        c.positive(t, None, "density", m.density)?
+        c.positive(t, None, "density", m.density())?
     };
     c.finite(t, None, "prestress", &[m.prestress])?;
     if m.wrinkling == WrinklingSpec::RelaxedEnergy && m.prestress != 0.0 {
@@ -255,7 +255,7 @@ pub(super) fn build_bending(
                     "= \"plate\" is E t^3 / (12 (1 - nu^2)) of an isotropic material; with model = \"orthotropic\" give { warp, weft } (N m)".into(),
                 ));
             };
-            let d = young * m.thickness.powi(3) / (12.0 * (1.0 - m.poisson_ratio.powi(2)));
+            let d = young * m.thickness().powi(3) / (12.0 * (1.0 - m.poisson_ratio.powi(2)));
             Some(BendingRigidity::Plate {
                 rigidity: d,
                 poisson_ratio: m.poisson_ratio,

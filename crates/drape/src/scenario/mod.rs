@@ -22,6 +22,7 @@ mod analysis;
 mod build;
 mod check;
 mod contact;
+mod lab;
 mod locate;
 mod material;
 mod obstacle;
@@ -30,6 +31,7 @@ mod tagged;
 
 pub use build::{absolute_paths, read_mesh_file};
 pub use contact::{ContactMethodName, ContactSpec, LagrangeSpec, PenaltySpec};
+pub use lab::{FastSpec, KesSpec, LabValues, WarpWeft};
 pub use obstacle::{
     BoxObstacleSpec, CylinderObstacleSpec, MeshObstacleSpec, ObstacleShape, ObstacleSpec,
     PlaneObstacleSpec, SphereObstacleSpec,
@@ -200,10 +202,14 @@ pub struct MaterialSpec {
     /// (weft contraction per unit warp stretch, `nu21 = nu12 E2 / E1`)
     /// with `nu12^2 < E1 / E2`. Required.
     pub poisson_ratio: f64,
-    /// Density `rho` (kg/m^3), > 0 (>= 0 in static analysis). Required.
-    pub density: f64,
-    /// Thickness `t` (m), > 0. Required.
-    pub thickness: f64,
+    /// Density `rho` (kg/m^3), > 0 (>= 0 in static analysis). Required,
+    /// unless a lab table gives `W`; after parsing, always given.
+    #[serde(default)]
+    pub density: Option<f64>,
+    /// Thickness `t` (m), > 0. Required, unless a lab table gives `T`;
+    /// after parsing, always given.
+    #[serde(default)]
+    pub thickness: Option<f64>,
     /// Wrinkling model: `"none"` (default), `"stress-projection"` or
     /// `"relaxed-energy"`.
     #[serde(default)]
@@ -230,6 +236,28 @@ pub struct MaterialSpec {
     /// model and of a woven `bending_rigidity`.
     #[serde(default)]
     pub warp_direction: Option<[f64; 3]>,
+    /// `[material.kes]`: the fabric's KES-FB values, in KES units, each
+    /// replacing an SI key (`lab`).
+    #[serde(default)]
+    pub kes: Option<KesSpec>,
+    /// `[material.fast]`: the fabric's FAST values, in FAST units, each
+    /// replacing an SI key (`lab`).
+    #[serde(default)]
+    pub fast: Option<FastSpec>,
+}
+
+impl MaterialSpec {
+    /// `thickness` (m): given after parsing (NaN, which every check
+    /// refuses, in a struct made by hand without it).
+    pub fn thickness(&self) -> f64 {
+        self.thickness.unwrap_or(f64::NAN)
+    }
+
+    /// `density` (kg/m³): given after parsing (NaN, which every check
+    /// refuses, in a struct made by hand without it).
+    pub fn density(&self) -> f64 {
+        self.density.unwrap_or(f64::NAN)
+    }
 }
 
 /// The values of `[material] model`.
@@ -676,6 +704,9 @@ impl Scenario {
                     .map_err(located)?,
             );
         }
+        // A fabric in a laboratory's units becomes the SI keys here.
+        let c = check::Checker { file: path, source };
+        scenario.material = lab::resolve(&c, &scenario.material)?;
         Ok(scenario)
     }
 }
