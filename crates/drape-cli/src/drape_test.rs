@@ -308,8 +308,8 @@ fn run_one(out: &Path, plan: &SpecimenPlan, prior: Prior, running: &Mutex<Vec<u3
         _ => failed(
             stderr
                 .lines()
-                .filter(|l| l.starts_with("error"))
-                .last()
+                .rev()
+                .find(|l| l.starts_with("error"))
                 .map(|l| l.trim_start_matches("error: ").to_string())
                 .filter(|l| !l.is_empty())
                 .unwrap_or(if message.is_empty() { stderr } else { message }),
