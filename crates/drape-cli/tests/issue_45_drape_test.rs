@@ -194,6 +194,22 @@ fn seeds_and_statistics() {
     assert!((a["dc_at_modal_folds"].as_f64().unwrap() - dc).abs() < 1e-12);
     let png = std::fs::read(dir.join("a/test.png")).unwrap();
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    // A specimen's directory reproduces it alone: `drape run` on its
+    // scenario.toml (face down, its waviness and cut) writes the same
+    // history, byte for byte.
+    let alone = dir.join("alone");
+    ok(&drape(
+        &[
+            "run",
+            "a/specimens/0001/scenario.toml",
+            "--out",
+            alone.to_str().unwrap(),
+            "-q",
+        ],
+        &dir,
+    ));
+    let history = |d: &Path| std::fs::read(d.join("history.csv")).unwrap();
+    assert!(history(&alone) == history(&dir.join("a/specimens/0001")));
 }
 
 /// A second run completes what is missing (a specimen whose directory
@@ -268,6 +284,29 @@ fn bad_input_is_refused() {
             "{table}: a specimen ran"
         );
     }
+    // A test.json that is not a test's would be replaced: refused.
+    std::fs::create_dir_all(dir.join("theirs")).unwrap();
+    std::fs::write(dir.join("theirs/test.json"), "{\"mine\": 1}").unwrap();
+    std::fs::write(dir.join("ok.toml"), tester("")).unwrap();
+    let o = drape(
+        &[
+            "test",
+            "ok.toml",
+            "--specimens",
+            "1",
+            "--out",
+            "theirs",
+            "-q",
+        ],
+        &dir,
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("theirs/test.json") && err.contains("not a drape test's"),
+        "{err}"
+    );
+    assert!(!dir.join("theirs/specimens/0000").exists());
     let o = drape(
         &["test", "s0.toml", "--specimens", "1", "--address", "x:1"],
         &dir,
