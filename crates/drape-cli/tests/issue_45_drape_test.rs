@@ -325,3 +325,54 @@ fn bad_input_is_refused() {
         "{err}"
     );
 }
+
+/// Ctrl-C (SIGINT to `drape test` alone: it passes it on to its running
+/// specimens) ends the running specimens after their step with a
+/// checkpoint, starts no more, writes test.json with what was done and
+/// exits 130; the same command then resumes them and completes the rest,
+/// to the uninterrupted test's results.
+#[test]
+fn an_interrupted_test_resumes() {
+    let dir = scratch("interrupt");
+    let text = tester("").replace(
+        "segments = [ { steps = 30, dt = 2.0e-3 } ]",
+        "segments = [ { steps = 300, dt = 2.0e-3 } ]",
+    );
+    std::fs::write(dir.join("s.toml"), text).unwrap();
+    let args = ["test", "s.toml", "--specimens", "3", "--jobs", "2", "-q"];
+    ok(&drape(&[&args[..], &["--out", "whole"]].concat(), &dir));
+    let child = Command::new(env!("CARGO_BIN_EXE_drape"))
+        .args([&args[..], &["--out", "cut"]].concat())
+        .current_dir(&dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    let frame = dir.join("cut/specimens/0000/fields/step_000030.vtu");
+    while !frame.exists() && started.elapsed() < std::time::Duration::from_secs(60) {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    let cut = json(&dir.join("cut/test.json"));
+    let statuses: Vec<&str> = (cut["specimens"].as_array().unwrap().iter())
+        .map(|s| s["status"].as_str().unwrap())
+        .collect();
+    assert_eq!(statuses.len(), 3);
+    assert!(statuses.contains(&"interrupted"), "{statuses:?}");
+    assert!(dir.join("cut/specimens/0000/checkpoint.bin").exists());
+    ok(&drape(&[&args[..], &["--out", "cut"]].concat(), &dir));
+    let (whole, cut) = (
+        json(&dir.join("whole/test.json")),
+        json(&dir.join("cut/test.json")),
+    );
+    for key in ["mean", "sd", "ci95", "fold_histogram", "modal_folds"] {
+        assert_eq!(whole[key], cut[key], "{key}");
+    }
+}
