@@ -41,14 +41,14 @@ pub struct TestArgs {
     /// differ (README, "The drape test").
     pub scenario: PathBuf,
     /// How many specimens (1 to 10000).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub specimens: u32,
     /// Output directory [default: ./out/<scenario stem>-test].
-    #[arg(long)]
+    #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Specimens at once (local), or the CPUs of a local Ray or Dask
     /// cluster [default: the CPUs here].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    #[arg(long, value_name = "J", value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub jobs: Option<u32>,
     /// Where the specimens run.
     #[arg(long, value_enum, default_value_t = Engine::Local)]
@@ -58,7 +58,7 @@ pub struct TestArgs {
     #[arg(long, value_name = "ADDR")]
     pub address: Option<String>,
     /// The test's seed: the same seed gives the same specimens.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, value_name = "S", default_value_t = 0)]
     pub seed: u64,
     /// Print nothing but errors and the result line.
     #[arg(long, short)]
@@ -345,6 +345,10 @@ fn delegate(a: &TestArgs, out: &Path) -> Result<(), Failure> {
             .unwrap_or("import drape failed")
             .to_string()));
     }
+    // From here a Ctrl-C reaches Python's test too (one process group),
+    // which ends its specimens and writes test.json; this process waits
+    // for it and exits with its code.
+    signals::setup_done();
     let mut command = Command::new(&python);
     command
         .args(["-m", "drape", "test"])

@@ -120,7 +120,7 @@ enum Command {
         specimen_radius: Option<f64>,
     },
     /// A drape test: N specimens of one scenario, differing by a seeded
-    /// perturbation (waviness, the cut's angle to the warp, the face up),
+    /// perturbation (waviness, the cut's angle to the warp, face up or down),
     /// run side by side; their drape coefficients and folds with the mean,
     /// sd, 95 % interval and fold-count histogram in DIR/test.json, their
     /// shadows in DIR/test.png.
