@@ -234,7 +234,7 @@ fn load(path: &Path) -> Result<(Setup, String), Failure> {
 }
 
 fn check(path: &Path) -> Result<(), Failure> {
-    let (setup, _) = load(path)?;
+    let (setup, text) = load(path)?;
     let m = &setup.model;
     println!("{}: ok", path.display());
     println!("  title     {}", setup.title);
@@ -307,6 +307,9 @@ fn check(path: &Path) -> Result<(), Failure> {
     for warning in simulation::warnings(&setup) {
         println!("  warning   {warning}");
     }
+    if let Ok(scenario) = Scenario::parse(&text, path) {
+        print_specimen(&scenario);
+    }
     for mon in &setup.monitors {
         println!(
             "  monitor   {} -> node {} at {:?}",
@@ -316,6 +319,32 @@ fn check(path: &Path) -> Result<(), Failure> {
         );
     }
     Ok(())
+}
+
+/// `drape check`'s lines of a drape test's `[test]` and `[specimen]`.
+fn print_specimen(s: &Scenario) {
+    if let Some(t) = &s.test {
+        let faces = match t.faces {
+            drape::scenario::Faces::Both => "alternately face up and down",
+            drape::scenario::Faces::Up => "all face up",
+        };
+        println!(
+            "  test      drape test specimens: waviness {} m ({} modes), cuts within ±{}°, {faces}",
+            human(t.waviness),
+            t.waviness_modes,
+            human(t.cut_angle)
+        );
+    }
+    if let Some(p) = &s.specimen {
+        println!(
+            "  specimen  waviness {} m (seed {}, {} modes), cut at {:.3}° to the warp, face {}",
+            human(p.waviness),
+            p.seed,
+            p.waviness_modes,
+            p.cut_angle,
+            p.face.name()
+        );
+    }
 }
 
 fn run(
