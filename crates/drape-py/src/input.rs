@@ -79,30 +79,9 @@ impl Source {
 /// `folder`.
 pub fn scenario_text(dict: &Bound<'_, PyDict>, folder: &Path) -> PyResult<String> {
     let mut table = table(dict, "", 0)?;
-    absolute_paths(&mut table, folder);
+    drape::scenario::absolute_paths(&mut table, folder);
     toml::to_string(&table)
         .map_err(|e| PyTypeError::new_err(format!("the scenario cannot be written as TOML: {e}")))
-}
-
-/// The keys that name files: `mesh.path` and each `obstacle[i].path`.
-fn absolute_paths(table: &mut toml::Table, folder: &Path) {
-    let join = |value: Option<&mut toml::Value>| {
-        if let Some(toml::Value::String(path)) = value
-            && Path::new(path.as_str()).is_relative()
-        {
-            *path = folder.join(path.as_str()).to_string_lossy().into_owned();
-        }
-    };
-    if let Some(toml::Value::Table(mesh)) = table.get_mut("mesh") {
-        join(mesh.get_mut("path"));
-    }
-    if let Some(toml::Value::Array(obstacles)) = table.get_mut("obstacle") {
-        for obstacle in obstacles {
-            if let toml::Value::Table(obstacle) = obstacle {
-                join(obstacle.get_mut("path"));
-            }
-        }
-    }
 }
 
 /// The deepest nesting of tables and lists a scenario may have: drape's

@@ -11,7 +11,9 @@
 //! * `result::RunResult`: summary, history, positions of a frame.
 //! * `input`: a scenario given as a path or as a dict.
 //! * `errors`: the library's errors as the package's exceptions.
+//! * `drape_test`: the specimens of `drape.test` and its report.
 
+mod drape_test;
 mod errors;
 mod input;
 mod result;
@@ -24,6 +26,8 @@ fn _drape(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run::run, m)?)?;
     m.add_function(wrap_pyfunction!(run::check, m)?)?;
     m.add_function(wrap_pyfunction!(run::_scenario_text, m)?)?;
+    m.add_function(wrap_pyfunction!(drape_test::_specimens, m)?)?;
+    m.add_function(wrap_pyfunction!(drape_test::_test_report, m)?)?;
     m.add_class::<result::RunResult>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -15,7 +15,9 @@
 //!   with one colour scale and one camera;
 //! - [`Layout::Animation`]: every frame as an animated GIF;
 //! - [`plot`]: the time histories (monitored heights, energies, Newton
-//!   iterations, contact force, wrinkling state, smallest gap).
+//!   iterations, contact force, wrinkling state, smallest gap);
+//! - [`test_figure`]: a drape test's specimens, their shadows overlaid and
+//!   the histogram of their fold counts (the caller measures them).
 //!
 //! Elements of order 2 and 3 are drawn as 4 and 9 flat sub-triangles
 //! through their nodes, outlined along the element's edges.
@@ -78,6 +80,7 @@ mod plot;
 mod raster;
 mod render;
 mod scenario;
+mod specimens;
 mod text;
 pub mod vtu;
 
@@ -96,3 +99,4 @@ pub use render::{
     render_bytes, render_image,
 };
 pub use scenario::{Obstacle, Shape, monitor_names, parse_obstacles, read_obstacles};
+pub use specimens::{TestFigure, test_figure};

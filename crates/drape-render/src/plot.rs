@@ -36,9 +36,11 @@ pub struct PlotReport {
     pub note: Option<String>,
 }
 
-const SS: u32 = 2;
+/// Supersampling: drawn at twice the size, box-filtered down.
+pub(crate) const SS: u32 = 2;
 
-fn register_fonts() {
+/// The embedded DejaVu Sans as plotters' "sans-serif" (once a process).
+pub(crate) fn register_fonts() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // The embedded fonts are checked to parse by a test; a failure here
@@ -420,7 +422,8 @@ fn extra_panel(e: &ExtraPanel) -> Panel {
     p
 }
 
-fn palette(k: usize) -> RGBColor {
+/// Tableau's ten colours, round.
+pub(crate) fn palette(k: usize) -> RGBColor {
     let c = colorous::TABLEAU10[k % colorous::TABLEAU10.len()];
     RGBColor(c.r, c.g, c.b)
 }
@@ -753,7 +756,8 @@ fn legend_corner(
     best.1
 }
 
-fn downsample(buf: &[u8], w: usize, h: usize, f: usize) -> RgbImage {
+/// `buf` (RGB, `w` × `h`) box-filtered down by `f` in each direction.
+pub(crate) fn downsample(buf: &[u8], w: usize, h: usize, f: usize) -> RgbImage {
     let (ow, oh) = (w / f, h / f);
     let mut img = RgbImage::new(ow as u32, oh as u32);
     let n = (f * f) as u32;

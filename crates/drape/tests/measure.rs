@@ -795,7 +795,7 @@ fn loads_that_cancel_leave_no_vertical() {
             CYLINDER,
             "[[load]]\nkind = \"gravity\"\nacceleration = [0.0, 0.0, -9.81]",
         );
-        s.material.density = 0.0;
+        s.material.density = Some(0.0);
         s
     };
     for s in [

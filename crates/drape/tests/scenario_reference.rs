@@ -73,7 +73,7 @@ fn readme() -> String {
 }
 
 /// The tables whose keys are fixed, with a probe giving an unknown key.
-const TABLES: [(&str, &str); 11] = [
+const TABLES: [(&str, &str); 13] = [
     ("top level", "zzz = 1\n"),
     ("`[mesh]`", "[mesh]\nzzz = 1\n"),
     ("`[material]`", "[material]\nzzz = 1\n"),
@@ -85,6 +85,16 @@ const TABLES: [(&str, &str); 11] = [
     ("`[output]`", "[output]\nzzz = 1\n"),
     ("`[[monitor]]`", "[[monitor]]\nzzz = 1\n"),
     ("`[refine]`", "[refine]\nzzz = 1\n"),
+    ("`[test]`", "[test]\nzzz = 1\n"),
+    ("`[specimen]`", "[specimen]\nzzz = 1\n"),
+];
+
+/// Tables inside a table, documented as `key.inner` in their table's
+/// section: the section, the prefix and the probe of their keys.
+const NESTED: [(&str, &str, &str); 3] = [
+    ("`[time]`", "rest.", "[time]\nrest = { zzz = 1 }\n"),
+    ("`[material]`", "kes.", "[material]\nkes = { zzz = 1 }\n"),
+    ("`[material]`", "fast.", "[material]\nfast = { zzz = 1 }\n"),
 ];
 
 /// The choices of a table read apart: its heading, its tag, and a probe
@@ -114,8 +124,9 @@ fn readme_documents_every_scenario_key() {
         check_section(&readme, heading, &expected(probe), "");
     }
     // Keys of the tables inside a table, documented as `table.key`.
-    let rest = expected("[time]\nrest = { zzz = 1 }\n");
-    check_section(&readme, "`[time]`", &rest, "rest.");
+    for (heading, prefix, probe) in NESTED {
+        check_section(&readme, heading, &expected(probe), prefix);
+    }
     // Tables read apart: the tag and every choice's keys.
     for (heading, tag, prefix) in CHOICES {
         let mut keys = BTreeSet::from([tag.to_string()]);
@@ -152,9 +163,8 @@ fn readme_documents_no_key_the_parser_refuses() {
     let readme = readme();
     for (heading, probe) in TABLES {
         let mut accepted = expected(probe);
-        if heading == "`[time]`" {
-            let rest = expected("[time]\nrest = { zzz = 1 }\n");
-            accepted.extend(rest.iter().map(|k| format!("rest.{k}")));
+        for (_, prefix, nested) in NESTED.iter().filter(|n| n.0 == heading) {
+            accepted.extend(expected(nested).iter().map(|k| format!("{prefix}{k}")));
         }
         for (keys, row) in documented(section(&readme, heading)) {
             for key in keys {

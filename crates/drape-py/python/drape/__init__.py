@@ -16,8 +16,15 @@ a Ray or Dask cluster::
 
     rows = drape.sweep("sweep.toml", out="out/sweep", workers=4, engine="local")
 
-or ``python -m drape sweep sweep.toml --out out/sweep``. The README's
-"Python" section describes both in full.
+or ``python -m drape sweep sweep.toml --out out/sweep``. Test a fabric
+as a laboratory does, on several specimens that differ by a seeded
+perturbation::
+
+    report = drape.test("drape-tester.toml", specimens=6, jobs=2)
+    report["mean"], report["ci95"], report["modal_folds"]
+
+or ``python -m drape test drape-tester.toml --specimens 6``. The README's
+"Python" section describes them in full.
 """
 
 from __future__ import annotations
@@ -91,10 +98,67 @@ def sweep(
     return run_sweep(path, out=out, workers=workers, engine=engine, address=address, progress=progress)
 
 
+def test(
+    scenario: Union[str, "os.PathLike[str]"],
+    specimens: int,
+    out: Union[str, "os.PathLike[str]", None] = None,
+    jobs: Optional[int] = None,
+    engine: str = "local",
+    address: Optional[str] = None,
+    seed: int = 0,
+    *,
+    progress: Optional[bool] = None,
+) -> Dict[str, Any]:
+    """A drape test: ``specimens`` specimens of one scenario, differing by
+    a seeded perturbation (the scenario's ``[test]`` table: waviness, the
+    cut's angle to the warp, face up or down), run side by side, each on
+    one thread; as ``drape test`` on the command line (README, "The drape
+    test").
+
+    Args:
+        scenario: the scenario file (a drape tester: a disc on a
+            cylinder).
+        specimens: how many (>= 1).
+        out: the test's directory [default: ``out/<stem>-test``]: it gets
+            ``specimens/NNNN/`` (each an ordinary run directory),
+            ``test.json`` and ``test.png``.
+        jobs: specimens at once (``local``), or the CPUs of the local Ray
+            or Dask cluster started when no ``address`` is given [default:
+            the CPUs of this machine].
+        engine: ``"local"``, ``"ray"`` or ``"dask"``, as for :func:`sweep`.
+        address: the Ray or Dask cluster to use.
+        seed: the test's seed; the same seed gives the same specimens.
+        progress: draw a progress bar on stderr; default: when stderr is a
+            terminal.
+
+    Returns:
+        ``test.json`` as a dict: ``specimens`` (each ``specimen``,
+        ``status``, ``drape_coefficient``, ``folds``, ``wall_seconds``,
+        ``message`` and its perturbation), ``mean``, ``sd``, ``ci95``,
+        ``fold_histogram``, ``modal_folds``, ``dc_at_modal_folds``,
+        ``measured`` of ``count``.
+
+    Raises:
+        ScenarioError: the scenario or its ``[test]`` table (nothing ran).
+        OutputError: ``out`` cannot be used (nothing ran).
+        ImportError: the engine's package is not installed (nothing ran).
+        KeyboardInterrupt: Ctrl-C, after ``test.json`` was written with
+            what was done; calling it again finishes the test.
+
+    Specimens completed by an earlier call (same scenario, seed) are not
+    run again; a failed one runs again; an interrupted one resumes.
+    """
+    from ._specimens import test as run_test
+
+    options = {"out": out, "jobs": jobs, "engine": engine, "address": address, "seed": seed, "progress": progress}
+    return run_test(scenario, specimens, options)
+
+
 __all__ = [
     "run",
     "check",
     "sweep",
+    "test",
     "RunResult",
     "DrapeError",
     "ScenarioError",

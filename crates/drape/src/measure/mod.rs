@@ -36,16 +36,17 @@
 //! output directory's reader of `drape-render`, the scenario with
 //! [`crate::scenario::Scenario::read`].
 
+pub mod ensemble;
 pub mod folds;
 pub mod shadow;
 pub mod tester;
 
+pub use crate::horizontal::Horizontal;
 pub use folds::{count_folds, polar_profile};
 pub use shadow::{Shadow, shadow};
 pub use tester::{DrapeTester, Given};
 
 use crate::mesh::ElementOrder;
-use crate::vec3;
 
 /// The fabric's surface in one state: current node positions and the
 /// elements' connectivity (the mesh's node order, [`crate::mesh`]).
@@ -95,61 +96,6 @@ impl Surface<'_> {
     }
 }
 
-/// The horizontal plane of a measurement: the unit vertical `k` and an
-/// orthonormal pair `e1, e2` with `e1 × e2 = k`, about an origin `c` (a
-/// point on the pedestal's axis). A point `x` projects to
-/// `(e1 · (x − c), e2 · (x − c))`; for `k = +z`, `e1 = x`, `e2 = y`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Horizontal {
-    origin: [f64; 3],
-    vertical: [f64; 3],
-    e1: [f64; 3],
-    e2: [f64; 3],
-}
-
-impl Horizontal {
-    /// The plane normal to `vertical` (any length) through `origin`;
-    /// `None` for a zero or non-finite `vertical` or a non-finite origin.
-    pub fn new(origin: [f64; 3], vertical: [f64; 3]) -> Option<Self> {
-        let length = vec3::norm(vertical);
-        if !length.is_finite() || length <= 0.0 || !origin.iter().all(|c| c.is_finite()) {
-            return None;
-        }
-        let k = vec3::scale(vertical, 1.0 / length);
-        // The coordinate axis least aligned with k, made normal to it.
-        let axis = (0..3)
-            .min_by(|&i, &j| k[i].abs().total_cmp(&k[j].abs()))
-            .unwrap_or(0);
-        let mut a = [0.0; 3];
-        a[axis] = 1.0;
-        let a = vec3::sub(a, vec3::scale(k, vec3::dot(a, k)));
-        let e1 = vec3::scale(a, 1.0 / vec3::norm(a));
-        let e2 = vec3::cross(k, e1);
-        Some(Self {
-            origin,
-            vertical: k,
-            e1,
-            e2,
-        })
-    }
-
-    /// The unit vertical `k`.
-    pub fn vertical(&self) -> [f64; 3] {
-        self.vertical
-    }
-
-    /// The origin `c`.
-    pub fn origin(&self) -> [f64; 3] {
-        self.origin
-    }
-
-    /// Plane coordinates `(e1 · (x − c), e2 · (x − c))` of `x`.
-    pub fn project(&self, x: [f64; 3]) -> [f64; 2] {
-        let d = vec3::sub(x, self.origin);
-        [vec3::dot(self.e1, d), vec3::dot(self.e2, d)]
-    }
-}
-
 /// What [`measure`] finds.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Measurement {
@@ -169,6 +115,9 @@ pub struct Measurement {
     /// [`crate::contact::proximity::crossings`], on the elements' linear
     /// sub-triangles).
     pub crossings: usize,
+    /// The shadow's outline in the plane's coordinates (m): its rings
+    /// ([`Shadow::outline`]), for a picture of it.
+    pub outline: Vec<Vec<[f64; 2]>>,
 }
 
 /// The drape coefficient `DC = (A − π r_p²) / (π R² − π r_p²)` of a shadow
@@ -207,6 +156,7 @@ pub fn measure(surface: &Surface, tester: &DrapeTester) -> Result<Measurement, M
         folds: count_folds(&profile),
         subdivisions: s.subdivisions,
         crossings: crossings_of(surface),
+        outline: s.outline,
     })
 }
 
@@ -315,33 +265,6 @@ pub enum MeasureError {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn horizontal_frame_is_orthonormal_and_right_handed() {
-        for v in [
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -3.0],
-            [0.0, 2.0, 0.0],
-            [1.0, -2.0, 0.5],
-        ] {
-            let h = Horizontal::new([0.1, 0.2, 0.3], v).unwrap();
-            let k = h.vertical();
-            assert!((vec3::norm(h.e1) - 1.0).abs() < 1e-15);
-            assert!((vec3::norm(h.e2) - 1.0).abs() < 1e-15);
-            assert!(vec3::dot(h.e1, k).abs() < 1e-15);
-            assert!(vec3::dot(h.e1, h.e2).abs() < 1e-15);
-            let c = vec3::cross(h.e1, h.e2);
-            assert!(vec3::norm(vec3::sub(c, k)) < 1e-15);
-            // A point on the axis projects to the origin.
-            let on_axis = vec3::add(h.origin(), vec3::scale(k, 0.7));
-            let p = h.project(on_axis);
-            assert!(p[0].abs() < 1e-15 && p[1].abs() < 1e-15);
-        }
-        let z = Horizontal::new([0.0; 3], [0.0, 0.0, 1.0]).unwrap();
-        assert_eq!(z.project([0.3, -0.2, 5.0]), [0.3, -0.2]);
-        assert!(Horizontal::new([0.0; 3], [0.0; 3]).is_none());
-        assert!(Horizontal::new([0.0; 3], [f64::NAN, 0.0, 1.0]).is_none());
-    }
 
     #[test]
     fn drape_coefficient_is_one_flat_and_zero_hanging() {

@@ -62,7 +62,8 @@ pub const CANCEL_TOLERANCE: f64 = 1e-6;
 /// reach are at one height.
 const TOP_TIE: f64 = 1e-9;
 
-/// A cylinder whose top face is above the specimen's initial plane by
+/// A cylinder whose top face is above the specimen's initial plane (its
+/// highest initial node) by
 /// more than this fraction of the specimen's reach is above it, not under
 /// it (a top disc): 1e-3, 0.15 mm for a 30 cm specimen — a top disc
 /// pressing into the fabric by a few micrometres still counts as above,
@@ -163,8 +164,14 @@ impl DrapeTester {
             .iter()
             .map(|&x| horizontal_distance(&up, x, rim_center))
             .fold(0.0, f64::max);
+        // The specimen's highest initial point: a cylinder whose top is
+        // above it is above the specimen (a flat specimen's plane; a
+        // drape test's wavy specimen at its highest wave).
+        let highest = (initial.nodes.iter())
+            .map(|&x| vec3::dot(x, up.vertical()))
+            .fold(f64::NEG_INFINITY, f64::max);
         let pedestal = match scenario {
-            Some(s) => find_pedestal(s, &up, rim_center, reach, time),
+            Some(s) => find_pedestal(s, &up, (rim_center, highest), reach, time),
             None => Err(MeasureError::NoPedestal {
                 reason: "no scenario to find it in".to_owned(),
             }),
@@ -202,7 +209,7 @@ impl DrapeTester {
 /// [`MeasureError::NoVertical`] where `w` is not finite, or
 /// `|w| <= CANCEL_TOLERANCE · Σ |w_i|` (the loads weigh nothing or cancel).
 pub fn vertical_of(scenario: &Scenario) -> Result<[f64; 3], MeasureError> {
-    let mass_per_area = scenario.material.density * scenario.material.thickness;
+    let mass_per_area = scenario.material.density() * scenario.material.thickness();
     let weights: Vec<[f64; 3]> = scenario
         .loads
         .iter()
@@ -264,13 +271,14 @@ struct Pedestal {
 }
 
 /// The vertical cylinder under the specimen (its axis within `reach` of
-/// `rim_center`) whose top face is highest along the vertical (the
+/// `rim_center`, its top no more than [`ABOVE_TOLERANCE`] `reach` above
+/// the specimen's `highest` initial point) whose top face is highest along the vertical (the
 /// nearest axis of equal tops and radii); or why there is none ([`MeasureError::NoPedestal`]), or why
 /// the choice is ambiguous ([`MeasureError::AmbiguousPedestal`]).
 fn find_pedestal(
     scenario: &Scenario,
     up: &Horizontal,
-    rim_center: [f64; 3],
+    (rim_center, highest): ([f64; 3], f64),
     reach: f64,
     time: f64,
 ) -> Result<Pedestal, MeasureError> {
@@ -306,7 +314,7 @@ fn find_pedestal(
             moved
         };
         let top = vec3::dot(top_face, up.vertical());
-        if top > vec3::dot(rim_center, up.vertical()) + ABOVE_TOLERANCE * reach {
+        if top > highest + ABOVE_TOLERANCE * reach {
             // Above the specimen: a top disc.
             continue;
         }

@@ -4,6 +4,7 @@ use super::analysis::build_analysis;
 use super::check::Checker;
 use super::contact::{build_contact, build_self_contact, check_initial_penetration};
 use super::material::{build_bending, build_material};
+use super::specimen::{make_wavy, specimen_of};
 use super::{
     AnalysisKind, BoxSpec, Component, FixSpec, LoadKindSpec, LoadSpec, MAX_REFINE_LEVELS,
     MeshShape, MeshSpec, MonitorSpec, RefineWhere, Scenario, ScenarioError, SolverSpec,
@@ -79,9 +80,17 @@ impl Scenario {
         let c = Checker { file, source };
         let base = file.parent().map(Path::to_path_buf).unwrap_or_default();
         let is_static = statics.is_some() || self.analysis.kind == AnalysisKind::Static;
-        let (material, section, density) = build_material(&c, &self.material, is_static)?;
-        check_moduli(&c, &self.material)?;
-        let bending = build_bending(&c, &self.material)?;
+        // A drape test's specimen: its warp cut and turned over now, its
+        // mesh made wavy once the obstacles that hold it flat are known
+        // (its loads, supports and monitors are selected on the plain mesh;
+        // a finer level's mesh is refined from the wavy one, made wavy once).
+        let specimen = specimen_of(&c, self, &mesh)?;
+        let material_spec = (specimen.as_ref())
+            .and_then(|s| s.2.as_ref())
+            .unwrap_or(&self.material);
+        let (material, section, density) = build_material(&c, material_spec, is_static)?;
+        check_moduli(&c, material_spec)?;
+        let bending = build_bending(&c, material_spec)?;
         let loads = (self.loads.iter().enumerate())
             .map(|(i, l)| build_load(&c, &mesh, i, l))
             .collect::<Result<Vec<_>, _>>()?;
@@ -102,6 +111,10 @@ impl Scenario {
             return Err(c.invalid("output", None, "every", "must be at least 1".into()));
         }
         let monitors = build_monitors(&c, &mesh, &self.monitors)?;
+        let mut mesh = mesh;
+        if let Some((p, plane, _)) = specimen.as_ref().filter(|_| statics.is_none()) {
+            make_wavy(&mut mesh, p, plane, contact.as_ref());
+        }
         check_memory(&c, &self.mesh, mesh.node_count())?;
         check_pattern_memory(&c, &self.mesh, &mesh, bending.is_some())?;
 
@@ -218,6 +231,30 @@ fn build_refine(c: &Checker, s: &Scenario, mesh: &Mesh) -> Result<Option<Refine>
         tolerance: r.tolerance,
         fraction: r.fraction,
     }))
+}
+
+/// The scenario `table`'s file paths (`mesh.path` and each
+/// `obstacle[i].path`) joined to `folder` where relative, so that its
+/// text means the same wherever it is saved (a Python dict's scenario, a
+/// sweep's case, a drape test's specimen).
+pub fn absolute_paths(table: &mut toml::Table, folder: &Path) {
+    let join = |value: Option<&mut toml::Value>| {
+        if let Some(toml::Value::String(path)) = value
+            && Path::new(path.as_str()).is_relative()
+        {
+            *path = folder.join(path.as_str()).to_string_lossy().into_owned();
+        }
+    };
+    if let Some(toml::Value::Table(mesh)) = table.get_mut("mesh") {
+        join(mesh.get_mut("path"));
+    }
+    if let Some(toml::Value::Array(obstacles)) = table.get_mut("obstacle") {
+        for obstacle in obstacles {
+            if let toml::Value::Table(obstacle) = obstacle {
+                join(obstacle.get_mut("path"));
+            }
+        }
+    }
 }
 
 /// `[solver]`: Newton's settings, each in its range (`linear` and

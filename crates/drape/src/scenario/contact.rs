@@ -262,7 +262,7 @@ pub(super) fn build_self_contact(
     }
     let distance = match spec.self_distance() {
         Some(d) => c.positive(t, None, "self_distance", d)?,
-        None => s.material.thickness,
+        None => s.material.thickness(),
     };
     // Friction and the slip speed as for the obstacles (build_contact
     // checks both when there are obstacles; here for when there are none).

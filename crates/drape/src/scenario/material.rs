@@ -75,11 +75,11 @@ pub(super) fn build_material(
             Elastic::Orthotropic(Box::new(material))
         }
     };
-    let thickness = c.positive(t, None, "thickness", m.thickness)?;
-    let density = if is_static && m.density == 0.0 {
+    let thickness = c.positive(t, None, "thickness", m.thickness())?;
+    let density = if is_static && m.density() == 0.0 {
         0.0
     } else {
-        c.positive(t, None, "density", m.density)?
+        c.positive(t, None, "density", m.density())?
     };
     c.finite(t, None, "prestress", &[m.prestress])?;
     if m.wrinkling == WrinklingSpec::RelaxedEnergy && m.prestress != 0.0 {
@@ -177,6 +177,14 @@ enum Elastic {
     Orthotropic(Box<Orthotropic>),
 }
 
+/// Whether the material has a warp: the orthotropic model, or a woven
+/// fabric's `bending_rigidity = { warp, weft }` (judged on what was
+/// written: `{ warp = 0, weft = 0 }` keeps its direction).
+pub(super) fn has_axis(m: &MaterialSpec) -> bool {
+    m.model == MaterialModel::Orthotropic
+        || matches!(m.bending_rigidity, Some(toml::Value::Table(_)))
+}
+
 /// `[material] warp_direction`, default `[1, 0, 0]`: finite and not zero.
 fn warp_direction(c: &Checker, m: &MaterialSpec) -> Result<[f64; 3], ScenarioError> {
     let t = "material";
@@ -247,7 +255,7 @@ pub(super) fn build_bending(
                     "= \"plate\" is E t^3 / (12 (1 - nu^2)) of an isotropic material; with model = \"orthotropic\" give { warp, weft } (N m)".into(),
                 ));
             };
-            let d = young * m.thickness.powi(3) / (12.0 * (1.0 - m.poisson_ratio.powi(2)));
+            let d = young * m.thickness().powi(3) / (12.0 * (1.0 - m.poisson_ratio.powi(2)));
             Some(BendingRigidity::Plate {
                 rigidity: d,
                 poisson_ratio: m.poisson_ratio,
@@ -313,10 +321,7 @@ pub(super) fn build_bending(
     };
     // Judged on what was written: a woven `{ warp = 0, weft = 0 }` is no
     // bending, but its warp direction is still in place.
-    if m.warp_direction.is_some()
-        && m.model != MaterialModel::Orthotropic
-        && !matches!(m.bending_rigidity, Some(toml::Value::Table(_)))
-    {
+    if m.warp_direction.is_some() && !has_axis(m) {
         return Err(c.invalid(
             t,
             None,

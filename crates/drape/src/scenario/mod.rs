@@ -22,17 +22,21 @@ mod analysis;
 mod build;
 mod check;
 mod contact;
+mod lab;
 mod locate;
 mod material;
 mod obstacle;
+mod specimen;
 mod tagged;
 
-pub use build::read_mesh_file;
+pub use build::{absolute_paths, read_mesh_file};
 pub use contact::{ContactMethodName, ContactSpec, LagrangeSpec, PenaltySpec};
+pub use lab::{FastSpec, KesSpec, LabValues, WarpWeft};
 pub use obstacle::{
     BoxObstacleSpec, CylinderObstacleSpec, MeshObstacleSpec, ObstacleShape, ObstacleSpec,
     PlaneObstacleSpec, SphereObstacleSpec,
 };
+pub use specimen::{Faces, SpecimenPlan, SpecimenSpec, TestSpec};
 
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -120,6 +124,11 @@ pub struct Scenario {
     /// Nodes whose positions go into the history (`[[monitor]]`).
     #[serde(default, rename = "monitor")]
     pub monitors: Vec<MonitorSpec>,
+    /// How the specimens of a drape test differ (`drape test`); a run
+    /// ignores it.
+    pub test: Option<TestSpec>,
+    /// This scenario is a specimen of a drape test, so perturbed.
+    pub specimen: Option<SpecimenSpec>,
     /// Refinement during the run (`[refine]`, none without it): the
     /// multilevel settle.
     pub refine: Option<RefineSpec>,
@@ -196,10 +205,14 @@ pub struct MaterialSpec {
     /// (weft contraction per unit warp stretch, `nu21 = nu12 E2 / E1`)
     /// with `nu12^2 < E1 / E2`. Required.
     pub poisson_ratio: f64,
-    /// Density `rho` (kg/m^3), > 0 (>= 0 in static analysis). Required.
-    pub density: f64,
-    /// Thickness `t` (m), > 0. Required.
-    pub thickness: f64,
+    /// Density `rho` (kg/m^3), > 0 (>= 0 in static analysis). Required,
+    /// unless a lab table gives `W`; after parsing, always given.
+    #[serde(default)]
+    pub density: Option<f64>,
+    /// Thickness `t` (m), > 0. Required, unless a lab table gives `T`;
+    /// after parsing, always given.
+    #[serde(default)]
+    pub thickness: Option<f64>,
     /// Wrinkling model: `"none"` (default), `"stress-projection"` or
     /// `"relaxed-energy"`.
     #[serde(default)]
@@ -226,6 +239,28 @@ pub struct MaterialSpec {
     /// model and of a woven `bending_rigidity`.
     #[serde(default)]
     pub warp_direction: Option<[f64; 3]>,
+    /// `[material.kes]`: the fabric's KES-FB values, in KES units, each
+    /// replacing an SI key (`lab`).
+    #[serde(default)]
+    pub kes: Option<KesSpec>,
+    /// `[material.fast]`: the fabric's FAST values, in FAST units, each
+    /// replacing an SI key (`lab`).
+    #[serde(default)]
+    pub fast: Option<FastSpec>,
+}
+
+impl MaterialSpec {
+    /// `thickness` (m): given after parsing (NaN, which every check
+    /// refuses, in a struct made by hand without it).
+    pub fn thickness(&self) -> f64 {
+        self.thickness.unwrap_or(f64::NAN)
+    }
+
+    /// `density` (kg/m³): given after parsing (NaN, which every check
+    /// refuses, in a struct made by hand without it).
+    pub fn density(&self) -> f64 {
+        self.density.unwrap_or(f64::NAN)
+    }
 }
 
 /// The values of `[material] model`.
@@ -725,6 +760,9 @@ impl Scenario {
                     .map_err(located)?,
             );
         }
+        // A fabric in a laboratory's units becomes the SI keys here.
+        let c = check::Checker { file: path, source };
+        scenario.material = lab::resolve(&c, &scenario.material)?;
         Ok(scenario)
     }
 }
