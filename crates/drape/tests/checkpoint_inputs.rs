@@ -145,9 +145,14 @@ checkpoint_every = 10
     /// A run into `out` stopped after step [`STOP_AT`] (as by Ctrl-C): its
     /// checkpoint is at that step.
     fn interrupted(&self, out: &Path) {
+        self.interrupted_at(out, STOP_AT);
+    }
+
+    /// A run into `out` stopped after step `at`.
+    fn interrupted_at(&self, out: &Path, at: usize) {
         let stop = AtomicBool::new(false);
         let mut observer = |info: &simulation::StepInfo| {
-            if info.step == STOP_AT {
+            if info.step == at {
                 stop.store(true, Ordering::SeqCst);
             }
         };
@@ -316,10 +321,10 @@ fn as_version_3(bytes: &[u8]) -> Vec<u8> {
         }
         at += 8;
     }
-    // Version 8's levels follow the inputs: no refinement, no level (two
-    // counts of 0).
-    assert_eq!(bytes[at..at + 16], [0; 16], "no levels");
-    at += 16;
+    // Version 8's levels and pending sub-steps follow the inputs: no
+    // refinement, no level, nothing pending (three counts of 0).
+    assert_eq!(bytes[at..at + 24], [0; 24], "no levels");
+    at += 24;
     // Version 7's self-contact layout ends the body (none here: a count
     // of 0), after version 6's kept linear-solver state: a direct solve
     // keeps nothing, its two flags 0.
@@ -349,7 +354,12 @@ fn a_version_3_checkpoint_resumes_without_the_file_check() {
     let whole = case.dir.join("whole");
     simulation::run(&case.setup(), &whole, &mut |_| {}).unwrap();
     let out = case.dir.join("out");
-    case.interrupted(&out);
+    // Version 3 knew no pending halves of a cut-back step: stopped where a
+    // whole scheduled step ended (a row of the schedule's dt).
+    let (header, rows) = common::read_history(&whole);
+    let dt = common::column(&header, &rows, "dt");
+    let at = (5..dt.len()).find(|&k| dt[k] == 2.0e-3).unwrap();
+    case.interrupted_at(&out, at);
     let path = checkpoint_path(&out);
     let v3 = as_version_3(&std::fs::read(&path).unwrap());
     assert_eq!(Checkpoint::recorded_inputs(&v3).unwrap(), None);
@@ -384,8 +394,11 @@ fn a_forged_or_truncated_checkpoint_is_refused_naming_the_field() {
     let bodies = 1;
     let ck =
         Checkpoint::from_bytes(&good, setup.model.dofs(), bodies, setup.scenario_hash).unwrap();
-    // (Some steps are cut back: more converged steps than scheduled.)
+    // (Some steps are cut back: more converged steps than scheduled; the
+    // stop came inside one, whose halves left the checkpoint keeps and
+    // the resume below takes.)
     assert!(ck.counters.step >= STOP_AT, "{:?}", ck.counters);
+    assert!(!ck.pending.is_empty(), "{:?}", ck.counters);
     let done = ck.counters.scheduled_done;
     assert_eq!(Checkpoint::read(&good, &setup).unwrap(), ck);
 

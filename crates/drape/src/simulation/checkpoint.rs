@@ -158,6 +158,11 @@ pub struct Checkpoint {
     /// checkpoint or without `[refine]`): the refinements that made the
     /// mesh the state lives on, and the levels finished.
     pub levels: Levels,
+    /// The sub-steps still to take of the scheduled step under way
+    /// (version 8; empty at a scheduled step's end, always with adaptive
+    /// steps): `(size, halvings)`, the next last — a stop inside a
+    /// cut-back step keeps its halves' progress.
+    pub pending: Vec<(f64, usize)>,
 }
 
 /// The multilevel settle's record: what rebuilds the mesh of the level a
@@ -267,6 +272,28 @@ fn read_levels(r: &mut Reader) -> Result<Levels, CheckpointError> {
     Ok(Levels { marks, records })
 }
 
+/// Reads the pending sub-steps (version 8): at most one per halving of a
+/// scheduled step, each a positive finite size.
+fn read_pending(r: &mut Reader) -> Result<Vec<(f64, usize)>, CheckpointError> {
+    let count = r.usize("pending sub-steps")?;
+    if count > 64 || count > r.remaining() / 16 {
+        return Err(invalid(format!(
+            "{count} pending sub-steps, beyond the file"
+        )));
+    }
+    (0..count)
+        .map(|_| {
+            let h = r.f64("pending sub-step")?;
+            let depth = r.usize("pending sub-step halvings")?;
+            refuse(
+                h.is_finite() && h > 0.0 && depth <= 64,
+                format!("pending sub-step {h} after {depth} halvings"),
+            )?;
+            Ok((h, depth))
+        })
+        .collect()
+}
+
 /// A checkpoint that cannot be used.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -366,6 +393,11 @@ impl Checkpoint {
             b.extend_from_slice(&input.hash.to_le_bytes());
         }
         write_levels(&mut b, &self.levels);
+        b.extend_from_slice(&(self.pending.len() as u64).to_le_bytes());
+        for (h, depth) in &self.pending {
+            b.extend_from_slice(&h.to_le_bytes());
+            b.extend_from_slice(&(*depth as u64).to_le_bytes());
+        }
         for v in [dofs as u64, nodes as u64, bodies as u64] {
             b.extend_from_slice(&v.to_le_bytes());
         }
@@ -528,10 +560,10 @@ impl Checkpoint {
         if let (Some(recorded), Some(current)) = (&inputs, expected.inputs) {
             Self::check_inputs(recorded, current)?;
         }
-        let levels = if version >= 8 {
-            read_levels(&mut r)?
+        let (levels, pending) = if version >= 8 {
+            (read_levels(&mut r)?, read_pending(&mut r)?)
         } else {
-            Levels::default()
+            (Levels::default(), Vec::new())
         };
         let (dofs, bodies) = (expected.dofs, expected.bodies);
         let (d, nodes, b) = (r.usize("dofs")?, r.usize("nodes")?, r.usize("bodies")?);
@@ -663,6 +695,7 @@ impl Checkpoint {
             kept_linear,
             self_contact_layout,
             levels,
+            pending,
         };
         ck.check_values()?;
         Ok(ck)
@@ -862,6 +895,10 @@ impl Checkpoint {
                 c.scheduled_done
             ),
         )?;
+        refuse(
+            self.pending.is_empty(),
+            "pending sub-steps with adaptive steps (always none)".into(),
+        )?;
         // A segment's steps are at least half its floor, dt / 2^halvings,
         // but its last one; twice that many with a margin.
         let most: f64 = segments
@@ -922,7 +959,10 @@ impl Checkpoint {
         )?;
         let per_step = 1usize.checked_shl(halvings as u32).unwrap_or(usize::MAX);
         refuse(
-            steps >= c.scheduled_done && steps <= c.scheduled_done.saturating_mul(per_step),
+            steps >= c.scheduled_done
+                && steps
+                    <= (c.scheduled_done + usize::from(!self.pending.is_empty()))
+                        .saturating_mul(per_step),
             format!(
                 "converged steps {steps} do not fit {} scheduled steps done (each 1 to 2^{halvings} steps)",
                 c.scheduled_done
@@ -937,8 +977,17 @@ impl Checkpoint {
             format!("step size {} with fixed steps (always 0)", c.step_size),
         )?;
         // The time the scheduled steps done reach.
-        let mut left = c.scheduled_done;
-        let mut reached = from;
+        // A stop inside a cut-back step: its pending halves end it.
+        let pending: f64 = self.pending.iter().map(|(h, _)| h).sum();
+        refuse(
+            self.pending.iter().all(|(_, d)| *d <= halvings),
+            format!(
+                "pending sub-steps {:?} halved more than {halvings} times",
+                self.pending
+            ),
+        )?;
+        let mut left = c.scheduled_done + usize::from(!self.pending.is_empty());
+        let mut reached = from - pending;
         for (n, dt) in segments {
             let k = left.min(*n);
             reached += k as f64 * dt;
@@ -1276,6 +1325,7 @@ mod tests {
                     note: None,
                 }],
             },
+            pending: vec![(5.0e-4, 1), (2.5e-4, 2)],
         }
     }
 
@@ -1285,11 +1335,12 @@ mod tests {
         8 + 32 * c.self_contact_layout.len()
     }
 
-    /// The bytes of `c`'s levels (version 8), after the input files.
+    /// The bytes of `c`'s levels and pending sub-steps (version 8), after
+    /// the input files.
     fn levels_len(c: &Checkpoint) -> usize {
         let mut b = Vec::new();
         write_levels(&mut b, &c.levels);
-        b.len()
+        b.len() + 8 + 16 * c.pending.len()
     }
 
     fn bodies(c: &Checkpoint) -> usize {
@@ -1366,10 +1417,8 @@ mod tests {
             }
             at += 8;
         }
-        let mut levels = Vec::new();
-        write_levels(&mut levels, &c.levels);
         let mut v7 = bytes[..at].to_vec();
-        v7.extend_from_slice(&bytes[at + levels.len()..bytes.len() - 8]);
+        v7.extend_from_slice(&bytes[at + levels_len(c)..bytes.len() - 8]);
         let bytes = seal(v7, 7);
         if version == 7 {
             return bytes;
@@ -1439,8 +1488,9 @@ mod tests {
     fn reads_versions_1_to_6_with_defaults_for_the_new_fields() {
         let c = sample(true);
         let mut expected = c.clone();
-        // Version 7: no levels.
+        // Version 7: no levels, no pending sub-steps.
         expected.levels = Levels::default();
+        expected.pending = Vec::new();
         let v7 = Checkpoint::from_bytes(&as_version(&c, 7), 6, 2, 0xdead_beef).unwrap();
         assert_eq!(v7, expected);
         assert_eq!(

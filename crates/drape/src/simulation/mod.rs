@@ -484,6 +484,7 @@ fn run_session(
         pvd,
         written,
         initial_frame,
+        pending,
     } = if let Some(level) = level {
         start::level(setup, out, &mut ws, level)?
     } else if control.resume {
@@ -552,6 +553,7 @@ fn run_session(
             rest,
             observer,
             levels,
+            pending,
         };
         // An output that cannot be written ends the run as a failed step
         // does: the summary says why.
@@ -619,6 +621,10 @@ struct Stepper<'a, 'scope> {
     observer: &'a mut dyn FnMut(&StepInfo),
     /// The multilevel record so far (empty without `[refine]`).
     levels: &'a Levels,
+    /// The sub-steps left of the scheduled step under way, where a stop
+    /// inside it ends the run (and a resume goes on with them); else
+    /// empty.
+    pending: Vec<(f64, usize)>,
 }
 
 impl Stepper<'_, '_> {
@@ -634,9 +640,12 @@ impl Stepper<'_, '_> {
                 if k <= self.counters.scheduled_done {
                     continue;
                 }
-                // Each scheduled step may be split into 2^k sub-steps.
-                let mut pending: Vec<(f64, usize)> = vec![(*dt, 0)];
-                let mut progressed = false;
+                // Each scheduled step may be split into 2^k sub-steps; a
+                // resumed one goes on with the halves it had left.
+                let resumed = std::mem::take(&mut self.pending);
+                let mut progressed = !resumed.is_empty();
+                let mut pending: Vec<(f64, usize)> =
+                    if progressed { resumed } else { vec![(*dt, 0)] };
                 while let Some((h, depth)) = pending.pop() {
                     match self.attempt(h) {
                         Ok(outcome) => {
@@ -646,13 +655,15 @@ impl Stepper<'_, '_> {
                             }
                         }
                         Err(NewtonError::Interrupted { .. }) => {
-                            // A checkpoint records scheduled steps done:
-                            // at the scheduled step's start the state is
-                            // one; past its first sub-steps it is not, and
-                            // a resume goes on from the previous one.
-                            if !progressed {
-                                self.checkpoint()?;
+                            // Past the scheduled step's first sub-steps,
+                            // the checkpoint keeps the halves left (the
+                            // interrupted one included).
+                            if progressed {
+                                pending.push((h, depth));
+                                self.pending = pending;
                             }
+                            self.checkpoint()?;
+                            self.pending.clear();
                             return Ok(End::Interrupted);
                         }
                         Err(_) if depth < self.setup.max_cutbacks => {
@@ -703,6 +714,11 @@ impl Stepper<'_, '_> {
     }
 
     fn attempt(&mut self, h: f64) -> Result<StepOutcome, NewtonError> {
+        // A stop asked for between two steps (the observer's) ends the run
+        // before the next, whatever the watcher has seen yet.
+        if self.stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
+            return Err(NewtonError::Interrupted { iteration: 0 });
+        }
         advance(self.setup, &mut self.state, h, self.length, self.ws)
     }
 
@@ -820,6 +836,7 @@ impl Stepper<'_, '_> {
             kept_linear: self.ws.newton.linear.kept(),
             self_contact_layout: self.ws.layout_stencils(),
             levels: self.levels.clone(),
+            pending: self.pending.clone(),
         };
         let path = checkpoint_path(self.out);
         write_atomic(&path, &ck.to_bytes()).map_err(io_err(&path))

@@ -184,6 +184,8 @@ pub(super) struct Start<'a> {
     pub(super) written: Vec<(f64, usize)>,
     /// A fresh run's initial frame, still to hand to the writer thread.
     pub(super) initial_frame: Option<Snapshot>,
+    /// The sub-steps a checkpoint left of its scheduled step.
+    pub(super) pending: Vec<(f64, usize)>,
 }
 
 /// A resumed session: the checkpoint in `out` read and checked against
@@ -260,6 +262,7 @@ pub(super) fn resume<'a>(
         pvd,
         written: ck.frames,
         initial_frame: None,
+        pending: ck.pending,
     })
 }
 
@@ -297,6 +300,7 @@ pub(super) fn level<'a>(
         pvd,
         written: level.written,
         initial_frame: None,
+        pending: Vec::new(),
     })
 }
 
@@ -410,6 +414,7 @@ pub(super) fn fresh<'a>(
         pvd: PvdWriter::new(out.join("fields.pvd")),
         written: vec![(0.0, 0)],
         initial_frame: Some(initial_frame),
+        pending: Vec::new(),
     })
 }
 
