@@ -311,6 +311,22 @@ fn check(path: &Path) -> Result<(), Failure> {
             )
         }
     }
+    if let Some(r) = &setup.refine {
+        let region = if r.uniform {
+            "every triangle".to_string()
+        } else {
+            format!(
+                "along the folds (the triangles holding {} of the curvature)",
+                r.fraction
+            )
+        };
+        println!(
+            "  refine    up to {} {}, {region}, each finer level settled statically; stop when the drape coefficient changes by less than {}",
+            r.levels,
+            if r.levels == 1 { "level" } else { "levels" },
+            r.tolerance
+        );
+    }
     for warning in simulation::warnings(&setup) {
         println!("  warning   {warning}");
     }

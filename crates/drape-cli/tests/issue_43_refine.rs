@@ -39,6 +39,11 @@ fn a_multilevel_run_is_the_same_on_one_thread_and_two_and_measures_renders_and_p
     let dir = scratch("issue43-refine");
     let scenario = tester();
     let scenario = scenario.to_str().unwrap();
+    let checked = drape(&["check", scenario], 2);
+    assert!(
+        checked.contains("refine    up to 2 levels, along the folds"),
+        "{checked}"
+    );
     let mut histories = Vec::new();
     for threads in [1, 2] {
         let out = dir.join(format!("out-{threads}"));
