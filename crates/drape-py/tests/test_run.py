@@ -327,3 +327,27 @@ def test_ctrl_c_stops_the_run_as_the_command_line_does(tmp_path):
     assert resumed.summary["steps"] == straight.summary["steps"]
     assert resumed.summary["monitors"] == straight.summary["monitors"]
     np.testing.assert_array_equal(resumed.positions(), straight.positions())
+
+
+def test_a_multilevel_settle_from_python_equals_the_command_line(cli, tmp_path):
+    """Issue 43: `[refine]` through `drape.run` — the same levels, history
+    and last frame (on the finest mesh) as `drape run`."""
+    scenario = REPO / "crates" / "drape" / "tests" / "scenarios" / "multilevel-tester.toml"
+    command_line = cli_run(cli, scenario, tmp_path / "cli")
+    python = drape.run(scenario, out=tmp_path / "py")
+    levels = python.summary["levels"]
+    assert len(levels) == 3
+    assert [l["elements"] for l in levels] == [l["elements"] for l in command_line.summary["levels"]]
+    assert levels[0]["elements"] < levels[1]["elements"] < levels[2]["elements"]
+    assert python.summary["elements"] == levels[2]["elements"]
+    np.testing.assert_array_equal(python.history["elements"], command_line.history["elements"])
+    assert python.history["elements"][0] == levels[0]["elements"]
+    assert python.history["elements"][-1] == levels[2]["elements"]
+    assert python.positions().shape == (levels[2]["nodes"], 3)
+    # (It has no monitors: the history's time, the frames and the last
+    # positions stand for the run.)
+    np.testing.assert_array_equal(python.history["time"], command_line.history["time"])
+    assert python.frames == command_line.frames
+    assert np.max(np.abs(python.positions() - command_line.positions())) <= TOLERANCE
+    for key in ("status", "steps", "newton_iterations", "nodes", "elements"):
+        assert python.summary[key] == command_line.summary[key], key
