@@ -166,6 +166,21 @@ steps = 4
         &mut |_| {},
     );
     held.unwrap();
+    // Laid exactly on the plane (gap 0), the sheet touches it: the
+    // penalty's normal stiffness and friction's stick hold it (issue 46:
+    // a node at gap 0 had no contact stiffness, and the first increment's
+    // Hessian was singular after 6 cut-backs).
+    let dir = temp_dir("sheet-on");
+    let on = run(&setup(&sheet(0.0, 0.5)), &dir, &mut |_| {}).unwrap();
+    assert_eq!(on.steps, 4);
+    let (h, rows) = read_history(&dir);
+    let gap = column(&h, &rows, "min_gap");
+    let active = column(&h, &rows, "active_contacts");
+    // At rest on the plane, every node in contact, pressed in by the
+    // weight over the penalty (10 N/m² x 0.01 m² / 25 nodes / 5e4 N/m at
+    // the most).
+    assert!(gap[4] < 0.0 && gap[4] > -1e-6, "{gap:?}");
+    assert_eq!(active[4], 25.0, "{active:?}");
     let free = run(
         &setup(&sheet(-1e-6, 0.0)),
         &temp_dir("sheet-free"),

@@ -238,7 +238,7 @@ impl ContactModel {
         }
     }
 
-    /// Every node–body pair with a gap below `threshold` at `y`, time `t`,
+    /// Every node–body pair with a gap at or below `threshold` at `y`, time `t`,
     /// using the state's hints: `(node, body, proximity)`; and the smallest
     /// gap of all.
     /// With `exact_min_gap`, every node is queried so that the smallest gap
@@ -274,7 +274,10 @@ impl ContactModel {
                 }
                 let prox = body.proximity(yp, t, self.hint(state, p, k));
                 min = min.min(prox.gap);
-                if prox.gap < threshold {
+                // A node exactly on the surface touches it (issue 46): the
+                // penalty gives it its normal stiffness, so that a sheet
+                // laid on a plane is not singular in statics.
+                if prox.gap <= threshold {
                     acc.push((p, k, prox));
                 }
             }
