@@ -131,7 +131,7 @@ fn equilibrium_to(
     let length = reference_length(&model.initial_positions());
     let mut iterations = Vec::new();
     for _ in 0..increments {
-        let report = StaticStepper.step(
+        let report = StaticStepper::default().step(
             model,
             &mut state,
             1.0 / increments as f64,

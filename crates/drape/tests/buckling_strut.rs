@@ -84,7 +84,7 @@ fn solve(projection: Projection, bow: f64) -> (Model, Vec<bool>, Vec<f64>) {
         ..Default::default()
     };
     let length = drape::simulation::reference_length(&model.initial_positions());
-    StaticStepper
+    StaticStepper::default()
         .step(&model, &mut state, 1.0, &settings, length, &mut ws)
         .unwrap();
     (model, held, state.positions)

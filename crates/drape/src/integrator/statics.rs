@@ -46,13 +46,18 @@ pub const FRICTION_ROUNDS: usize = 8;
 
 /// Load stepping: each step raises the load factor by the increment it
 /// is given (the schedule's `1 / steps`) and solves for equilibrium.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct StaticStepper;
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StaticStepper {
+    /// The time the load factor counts from: `lambda = state.time - from`
+    /// (0, but on a finer level of a multilevel settle:
+    /// [`crate::setup::Analysis::Static`]).
+    pub from: f64,
+}
 
 impl StaticStepper {
-    /// Advances the load factor `state.time` by `dlambda` and solves for
-    /// equilibrium. Velocities and accelerations stay zero. On error `state`
-    /// is unchanged.
+    /// Advances the load factor `state.time - from` by `dlambda` and
+    /// solves for equilibrium. Velocities and accelerations stay zero. On
+    /// error `state` is unchanged.
     pub fn step(
         &self,
         model: &Model,
@@ -62,22 +67,7 @@ impl StaticStepper {
         length: f64,
         ws: &mut DynamicWorkspace,
     ) -> Result<StepOutcome, NewtonError> {
-        self.step_from(0.0, model, state, dlambda, settings, length, ws)
-    }
-
-    /// [`StaticStepper::step`] with the load factor counted from the time
-    /// `from`: `lambda = state.time - from` ([`crate::setup::Analysis::Static`]).
-    #[allow(clippy::too_many_arguments)]
-    pub fn step_from(
-        &self,
-        from: f64,
-        model: &Model,
-        state: &mut State,
-        dlambda: f64,
-        settings: &NewtonSettings,
-        length: f64,
-        ws: &mut DynamicWorkspace,
-    ) -> Result<StepOutcome, NewtonError> {
+        let from = self.from;
         let lambda = (state.time - from + dlambda).min(1.0 + 1e-12);
         model.dead_forces(lambda, Some(lambda), &mut ws.dead);
         ws.old_ext.copy_from_slice(&ws.f_ext);

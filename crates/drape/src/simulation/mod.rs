@@ -1110,7 +1110,7 @@ fn advance(
             newmark.step(&setup.model, state, h, &setup.newton, length, ws)
         }
         Analysis::Static { from, .. } => {
-            StaticStepper.step_from(*from, &setup.model, state, h, &setup.newton, length, ws)
+            StaticStepper { from: *from }.step(&setup.model, state, h, &setup.newton, length, ws)
         }
     }
 }

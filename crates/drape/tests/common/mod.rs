@@ -132,7 +132,7 @@ pub fn equilibrium_with(
         ..Default::default()
     };
     let length = drape::simulation::reference_length(&model.initial_positions());
-    let report = drape::integrator::StaticStepper
+    let report = drape::integrator::StaticStepper::default()
         .step(model, &mut state, 1.0, &settings, length, &mut ws)
         .unwrap();
     let stats = ws.newton.linear.stats;
@@ -188,7 +188,7 @@ pub fn sheared_equilibrium(s: &mut Setup, gamma: f64) -> (Vec<f64>, f64) {
     let mut state = drape::integrator::State::at_rest(&s.model, start);
     let length = drape::simulation::reference_length(&x0);
     s.newton.max_iterations = 50;
-    drape::integrator::StaticStepper
+    drape::integrator::StaticStepper::default()
         .step(&s.model, &mut state, 1.0, &s.newton, length, &mut ws)
         .unwrap();
     let off = state
