@@ -578,17 +578,16 @@ impl Bending {
                         }
                     }
                     if want_h {
+                        // Column node by column node: a column's blocks lie
+                        // in its three scalar columns, close together.
                         let blocks = &self.blocks[self.block_start[k]..];
-                        for r in 0..len {
-                            for (l, &b) in nodes.iter().enumerate() {
-                                let base = blocks[r * len + l];
-                                let stride = 3 * (node_ptr[b + 1] - node_ptr[b]);
-                                for j in 0..3 {
+                        for (l, &b) in nodes.iter().enumerate() {
+                            let stride = 3 * (node_ptr[b + 1] - node_ptr[b]);
+                            for j in 0..3 {
+                                for r in 0..len {
+                                    let base = blocks[r * len + l] + j * stride;
                                     for i in 0..3 {
-                                        hp.add(
-                                            base + j * stride + i,
-                                            local.hessian[3 * r + i][3 * l + j],
-                                        );
+                                        hp.add(base + i, local.hessian[3 * r + i][3 * l + j]);
                                     }
                                 }
                             }

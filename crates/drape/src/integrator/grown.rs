@@ -160,6 +160,9 @@ fn build(
         .with_transpose(pattern.transpose_map().to_vec())
         .with_node_blocks(node_ptr, node_rows)
         .with_mode(ws.linear.mode());
+    if let Some(compact) = ws.linear.compact_pattern() {
+        linear = linear.with_compact(compact.clone());
+    }
     linear.stats = ws.linear.stats;
     ws.rebind(linear, pattern.nnz());
     *grown = Some(Grown {

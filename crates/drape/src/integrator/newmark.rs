@@ -134,11 +134,22 @@ impl DynamicWorkspace {
     ) -> Result<Self, crate::solver::LinearSolveError> {
         let n = model.dofs();
         let (node_ptr, node_rows) = model.pattern().node_graph();
-        let linear =
+        let mut linear =
             crate::solver::LinearSolver::new(&model.pattern().col_ptr, &model.pattern().row_idx)?
                 .with_transpose(model.pattern().transpose_map().to_vec())
                 .with_node_blocks(node_ptr, node_rows)
                 .with_mode(mode);
+        let compact = matches!(
+            mode,
+            crate::solver::LinearMode::Compact | crate::solver::LinearMode::Auto
+        );
+        if compact && model.bending().is_some() {
+            let mesh = model.mesh();
+            linear = linear.with_compact(crate::solver::SparsePattern::new(
+                mesh.node_count(),
+                mesh.elements(),
+            ));
+        }
         Ok(Self {
             q: vec![0.0; n],
             mq: vec![0.0; n],

@@ -545,8 +545,10 @@ pub struct SolverSpec {
     pub max_cutbacks: usize,
     /// Linear solver: `"auto"` (default: `direct` up to 300,000 unknowns,
     /// `reuse` above), `"direct"` (a fresh sparse factorisation every
-    /// solve), `"iterative"` (block-Jacobi GMRES, no factorisation) or
-    /// `"reuse"` (GMRES preconditioned by an earlier factorisation).
+    /// solve), `"iterative"` (block-Jacobi GMRES, no factorisation),
+    /// `"reuse"` (GMRES preconditioned by an earlier factorisation) or
+    /// `"compact"` (with bending, CG preconditioned by the factor of the
+    /// Hessian's compact part: [`crate::solver::LinearMode::Compact`]).
     #[serde(default)]
     pub linear: crate::solver::LinearMode,
     /// Most chord steps after each Newton step that contracted fast (the

@@ -48,9 +48,11 @@
 //! call.
 
 use super::block_lu::BlockLu;
+use super::compact::Compact;
 use super::direct::{self, Cholesky, Lu, Scratch};
 use super::krylov;
 pub use super::linear_error::{LinearSolveError, Matrix, SolveFailure};
+use super::pattern::SparsePattern;
 pub use super::precondition::KeptMultigrid;
 use super::precondition::{Preconditioned, Preconditioner, Preconditioners};
 use super::product::{self, Product};
@@ -86,6 +88,9 @@ pub enum Factorization {
     MultigridCg,
     /// GMRES preconditioned by a multigrid V-cycle (non-symmetric).
     MultigridGmres,
+    /// Conjugate gradients preconditioned by the factor of the Hessian's
+    /// compact part ([`super::compact`]).
+    CompactCg,
 }
 
 impl std::fmt::Display for Factorization {
@@ -101,6 +106,7 @@ impl std::fmt::Display for Factorization {
             Factorization::BlockJacobiCg => "block-Jacobi CG",
             Factorization::MultigridCg => "multigrid CG",
             Factorization::MultigridGmres => "multigrid GMRES",
+            Factorization::CompactCg => "CG with the compact part's factor",
         })
     }
 }
@@ -163,6 +169,22 @@ const MULTIGRID_ITERATIONS: usize = 100;
 const MULTIGRID_BACKOFF: usize = 8;
 /// Most block-Jacobi GMRES iterations before LU takes over.
 const ITERATIVE_ITERATIONS: usize = 400;
+/// Most CG iterations preconditioned by the compact part's factor
+/// before the whole Hessian is factorised.
+const COMPACT_ITERATIONS: usize = 30;
+/// CG iterations above which the compact part's factor counts as weak:
+/// the next [`COMPACT_BACKOFF`] systems factorise the whole Hessian. The
+/// compact part of a fourth-order operator is a second-order one, a good
+/// preconditioner where the mass term dominates (dynamic steps) and a poor
+/// one in statics on fine meshes (docs/performance.md, "The compact
+/// preconditioner").
+const COMPACT_WEAK: usize = 20;
+/// Systems that factorise the whole Hessian after the compact factor was
+/// weak once; each weak try in a row doubles them, up to
+/// [`COMPACT_BACKOFF_MAX`].
+const COMPACT_BACKOFF: usize = 8;
+/// The most systems the compact path is skipped for in a row.
+const COMPACT_BACKOFF_MAX: usize = 512;
 
 /// How linear systems are solved (`[solver] linear`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -190,6 +212,14 @@ pub enum LinearMode {
     /// factorisation but the coarsest level's; cost per solve about linear
     /// in the mesh size. Block-Jacobi CG/GMRES is the fallback.
     Iterative,
+    /// The projected Newton's systems (symmetric positive definite) by
+    /// conjugate gradients preconditioned with the factor of the
+    /// Hessian's compact part: the couplings of nodes that share a
+    /// triangle, bending's farther couplings moved onto the diagonal
+    /// ([`super::compact`]). Its factor has the membrane's fill, not the
+    /// bending stencils'. Other systems as `direct`; without bending,
+    /// `direct`.
+    Compact,
 }
 
 /// What a [`LinearSolver`] carries from one time step to the next that
@@ -261,6 +291,13 @@ pub struct LinearSolver {
     last_used: Option<Factorization>,
     /// `reuse`: the matrix of the kept factor ([`KeptLinear::factor`]).
     factor_from: Option<KeptFactor>,
+    /// `compact`: the compact part's preconditioner, when the Hessian
+    /// has couplings beyond it.
+    compact: Option<Box<Compact>>,
+    /// Systems left that skip the compact path after it was weak, and how
+    /// many the next weak try skips.
+    compact_skips: usize,
+    compact_backoff: usize,
 }
 
 impl std::fmt::Debug for LinearSolver {
@@ -320,6 +357,9 @@ impl LinearSolver {
             blocks_current: false,
             last_used: None,
             factor_from: None,
+            compact: None,
+            compact_skips: 0,
+            compact_backoff: COMPACT_BACKOFF,
         })
     }
 
@@ -348,6 +388,23 @@ impl LinearSolver {
     pub fn with_node_blocks(mut self, node_ptr: &[usize], node_rows: &[usize]) -> Self {
         self.node_graph = Some((node_ptr.to_vec(), node_rows.to_vec()));
         self
+    }
+
+    /// Preconditions the projected Newton's systems by the factor of the
+    /// compact part `compact` (a node-block pattern within this one's,
+    /// [`LinearMode::Compact`]); after [`LinearSolver::with_node_blocks`].
+    /// Nothing when `compact` holds every coupling.
+    pub fn with_compact(mut self, compact: SparsePattern) -> Self {
+        if let Some((ptr, rows)) = &self.node_graph {
+            let c = Compact::new(compact, ptr, rows);
+            self.compact = (c.far_blocks() > 0).then(|| Box::new(c));
+        }
+        self
+    }
+
+    /// The compact part's pattern, when its preconditioner is in use.
+    pub fn compact_pattern(&self) -> Option<&SparsePattern> {
+        self.compact.as_ref().map(|c| c.pattern())
     }
 
     /// Entries of the Cholesky factor `L`, once it has been analysed.
@@ -393,7 +450,13 @@ impl LinearSolver {
         self.last_krylov_iterations = 0;
         self.last_used = None;
         let n = self.dimension();
-        let used = if self.uses_multigrid() {
+        let compact = match self.solve_compact(values, rhs) {
+            Ok(c) => c,
+            Err(f) => return Err(f.of(Matrix::Hessian)),
+        };
+        let used = if let Some(c) = compact {
+            c
+        } else if self.uses_multigrid() {
             self.solve_multigrid(values, true, rhs)
         } else if self.mode != LinearMode::Reuse
             && n <= BLOCK_LU_MAX_SYMMETRIC
@@ -447,23 +510,34 @@ impl LinearSolver {
         Ok(used)
     }
 
-    /// The cascade up to LU, cheapest path first: the path that solved
-    /// the system, its solution in `self.rhs`, or `None`.
     /// The mode solves take: `auto` made definite by the system's size.
     pub fn effective_mode(&self) -> LinearMode {
         match self.mode {
             LinearMode::Auto if self.dimension() > AUTO_ITERATIVE_ABOVE => LinearMode::Reuse,
-            LinearMode::Auto => LinearMode::Direct,
+            LinearMode::Auto | LinearMode::Compact => LinearMode::Direct,
             m => m,
         }
     }
 
+    /// The cascade up to LU, cheapest path first: the path that solved
+    /// the system, its solution in `self.rhs`, or `None`.
     fn solve_before_lu(
         &mut self,
         values: &[f64],
         symmetric: bool,
         rhs: &[f64],
     ) -> Result<Option<Factorization>, SolveFailure> {
+        // `compact` tries a symmetric system as positive definite first;
+        // one that is not goes down the cascade.
+        // (An indefinite one — the exact Hessian of a fabric in
+        // compression — backs the path off as a weak preconditioner does.)
+        if symmetric {
+            match self.solve_compact(values, rhs)? {
+                Some(Some(used)) => return Ok(Some(used)),
+                Some(None) => self.back_off_compact(),
+                None => {}
+            }
+        }
         let n = self.dimension();
         let mode = self.effective_mode();
         // (A block LU of an earlier Hessian as GMRES preconditioner does
@@ -569,6 +643,68 @@ impl LinearSolver {
             self.rhs[(i, 0)] = *v;
         }
         Ok(ok)
+    }
+
+    /// The compact path ([`LinearMode::Compact`]) for a matrix that
+    /// should be positive definite: `None` where it does not apply (no
+    /// compact preconditioner, another mode) or CG did not converge in
+    /// [`COMPACT_ITERATIONS`] (the caller then factorises the whole
+    /// Hessian); `Some(None)` when the matrix is not positive definite
+    /// (the compact factor failed, or CG met a non-positive curvature);
+    /// else the solution in `self.rhs`.
+    fn solve_compact(
+        &mut self,
+        values: &[f64],
+        b: &[f64],
+    ) -> Result<Option<Option<Factorization>>, SolveFailure> {
+        let open = match self.mode {
+            LinearMode::Compact => true,
+            LinearMode::Auto => !self.uses_multigrid(),
+            _ => false,
+        };
+        if !open {
+            return Ok(None);
+        }
+        let Some(compact) = self.compact.as_deref_mut() else {
+            return Ok(None);
+        };
+        if self.compact_skips > 0 {
+            self.compact_skips -= 1;
+            return Ok(None);
+        }
+        if compact.uses_block_lu() {
+            self.stats.block_lu_factorizations += 1;
+        } else {
+            self.stats.cholesky_factorizations += 1;
+        }
+        if !compact.factorize(values)? {
+            return Ok(Some(None));
+        }
+        let tolerance = self.krylov_tolerance;
+        let mut op = CompactOperator {
+            values,
+            pattern: self.pattern.as_ref(),
+            product: &self.product,
+            compact,
+        };
+        let outcome = krylov::pcg(&mut op, b, tolerance, COMPACT_ITERATIONS, &mut self.krylov);
+        let out_of_iterations = outcome.iterations >= COMPACT_ITERATIONS;
+        if outcome.iterations > COMPACT_WEAK {
+            self.back_off_compact();
+        } else {
+            self.compact_backoff = COMPACT_BACKOFF;
+        }
+        if self.finish_krylov(outcome) {
+            return Ok(Some(Some(Factorization::CompactCg)));
+        }
+        Ok(if out_of_iterations { None } else { Some(None) })
+    }
+
+    /// Skips the compact path for the next systems after a weak try,
+    /// twice as many as the last time in a row.
+    fn back_off_compact(&mut self) {
+        self.compact_skips = self.compact_backoff;
+        self.compact_backoff = (2 * self.compact_backoff).min(COMPACT_BACKOFF_MAX);
     }
 
     /// Multigrid-preconditioned CG (GMRES when not symmetric). A kept
@@ -824,10 +960,34 @@ impl LinearSolver {
     /// Solves `A_old x = b` in place with the factorisation of the last
     /// successful [`LinearSolver::solve`] (a chord step of Newton's
     /// method: the matrix of an earlier iterate, no new factorisation).
-    /// `false`, with `rhs` unchanged, when the last solve left no factor
-    /// that can be reused this way (Krylov and LU paths).
-    pub fn solve_again(&mut self, rhs: &mut [f64]) -> bool {
+    /// `values` are the last solve's matrix: the compact path solves with
+    /// it by CG preconditioned with the factor it made. `false`, with
+    /// `rhs` unchanged, when the last solve left no factor that can be
+    /// reused this way (the other Krylov paths and LU).
+    pub fn solve_again(&mut self, values: &[f64], rhs: &mut [f64]) -> bool {
         match self.last_used {
+            Some(Factorization::CompactCg) => {
+                let Some(compact) = self.compact.as_deref_mut() else {
+                    return false;
+                };
+                let mut op = CompactOperator {
+                    values,
+                    pattern: self.pattern.as_ref(),
+                    product: &self.product,
+                    compact,
+                };
+                let outcome = krylov::pcg(
+                    &mut op,
+                    rhs,
+                    self.krylov_tolerance,
+                    COMPACT_ITERATIONS,
+                    &mut self.krylov,
+                );
+                if !self.finish_krylov(outcome) {
+                    return false;
+                }
+                rhs.copy_from_slice(&self.krylov.x);
+            }
             Some(Factorization::BlockLu) => {
                 let Some(lu) = self.block_lu.as_mut() else {
                     return false;
@@ -1004,6 +1164,29 @@ impl LinearSolver {
         }
         let finite = x.iter().all(|v| v.is_finite());
         outcome.converged && finite
+    }
+}
+
+/// The whole Hessian and the compact part's factor, for CG.
+struct CompactOperator<'a> {
+    values: &'a [f64],
+    pattern: faer::sparse::SymbolicSparseColMatRef<'a, usize>,
+    product: &'a Product,
+    compact: &'a mut Compact,
+}
+
+impl krylov::Operator for CompactOperator<'_> {
+    fn apply(&mut self, x: &[f64], out: &mut [f64]) {
+        self.product.apply(self.pattern, self.values, x, out);
+    }
+
+    fn precondition(&mut self, r: &[f64], z: &mut [f64]) {
+        self.compact.apply(r, z);
+    }
+
+    fn precondition_in_place(&mut self, x: &mut Mat<f64>) {
+        let r = x.col_as_slice(0).to_vec();
+        self.compact.apply(&r, x.col_as_slice_mut(0));
     }
 }
 
@@ -1252,7 +1435,7 @@ pub(super) mod tests {
             // Newton's chord steps reuse the block LU's factor.
             let b2: Vec<f64> = (0..dim).map(|i| ((i * 3) % 7) as f64 - 3.0).collect();
             let mut x2 = b2.clone();
-            assert!(solver.solve_again(&mut x2), "{mode:?}");
+            assert!(solver.solve_again(&v, &mut x2), "{mode:?}");
             let r2 = residual(&p.col_ptr, &p.row_idx, &v, &x2, &b2);
             assert!(r2 < 1e-8, "{mode:?}: chord residual {r2:e}");
         }
@@ -1384,6 +1567,108 @@ pub(super) mod tests {
             }
         }
         (p, v)
+    }
+
+    /// A graph Laplacian plus `shift` on an `n x n` grid of squares cut
+    /// into triangles, widened by couplings two nodes apart along the rows
+    /// (bending's farther couplings): the whole pattern, the compact one
+    /// (the triangles' alone) and the values, on the z component negated
+    /// when `indefinite`.
+    fn wide_grid(
+        n: usize,
+        shift: f64,
+        indefinite: bool,
+    ) -> (
+        crate::solver::SparsePattern,
+        crate::solver::SparsePattern,
+        Vec<f64>,
+    ) {
+        let (p, compact) = crate::solver::SparsePattern::wide_grid(n, n);
+        let nodes = p.dimension() / 3;
+        let (ptr, rows) = p.node_graph();
+        let mut v = vec![0.0; p.nnz()];
+        for b in 0..nodes {
+            let deg = (ptr[b + 1] - ptr[b] - 1) as f64;
+            for q in ptr[b]..ptr[b + 1] {
+                for i in 0..3 {
+                    let x = if rows[q] == b { deg + shift } else { -1.0 };
+                    let x = if indefinite && i == 2 { -x } else { x };
+                    v[p.entry(q, b, i, i)] = x;
+                }
+            }
+        }
+        (p, compact, v)
+    }
+
+    /// `compact` solves a positive definite system with couplings beyond
+    /// its compact part by CG preconditioned with the compact factor (the
+    /// node-block `L D L^T` below 5,000 unknowns, Cholesky above), to the
+    /// Krylov tolerance, and serves a chord step with the same factor; an
+    /// indefinite one it refuses (`None`, for the projected Newton to
+    /// project). Without a compact part it solves as `direct`.
+    #[test]
+    fn compact_solves_by_cg_with_the_compact_factor() {
+        for (n, factor) in [(12, "block LU"), (45, "Cholesky")] {
+            let (p, compact, v) = wide_grid(n, 1.0, false);
+            let dim = p.dimension();
+            let b: Vec<f64> = (0..dim).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
+            let mut solver =
+                node_block_solver(&p, LinearMode::Compact).with_compact(compact.clone());
+            solver.krylov_tolerance = 1e-10;
+            let mut x = b.clone();
+            assert_eq!(
+                solver.solve_spd(&v, &mut x).unwrap(),
+                Some(Factorization::CompactCg),
+                "{factor}"
+            );
+            let r = residual(&p.col_ptr, &p.row_idx, &v, &x, &b) / crate::vecn::norm(&b);
+            assert!(r < 1e-9, "{factor}: relative residual {r:e}");
+            assert!(solver.last_krylov_iterations > 1, "{factor}");
+            let (choleskys, block_lus) = (
+                solver.stats.cholesky_factorizations,
+                solver.stats.block_lu_factorizations,
+            );
+            assert_eq!(
+                (choleskys, block_lus),
+                if dim <= BLOCK_LU_MAX_SYMMETRIC {
+                    (0, 1)
+                } else {
+                    (1, 0)
+                },
+                "{factor}"
+            );
+            let b2: Vec<f64> = (0..dim).map(|i| ((i * 3) % 7) as f64 - 3.0).collect();
+            let mut x2 = b2.clone();
+            assert!(solver.solve_again(&v, &mut x2), "{factor}");
+            let r2 = residual(&p.col_ptr, &p.row_idx, &v, &x2, &b2) / crate::vecn::norm(&b2);
+            assert!(r2 < 1e-9, "{factor}: chord relative residual {r2:e}");
+            assert_eq!(solver.stats.chord_solves, 1);
+
+            let (_, _, w) = wide_grid(n, 1.0, true);
+            let mut y = b.clone();
+            assert_eq!(solver.solve_spd(&w, &mut y).unwrap(), None, "{factor}");
+            assert_eq!(y, b, "{factor}: a refused solve leaves b");
+        }
+        // The compact part holding every coupling: no preconditioner, the
+        // node-block L D L^T of `direct`.
+        let p = crate::solver::SparsePattern::triangle_grid(6, 6);
+        let mut solver = node_block_solver(&p, LinearMode::Compact).with_compact(p.clone());
+        assert!(solver.compact_pattern().is_none());
+        let (ptr, rows) = p.node_graph();
+        let mut v = vec![0.0; p.nnz()];
+        for b in 0..ptr.len() - 1 {
+            let deg = (ptr[b + 1] - ptr[b] - 1) as f64;
+            for q in ptr[b]..ptr[b + 1] {
+                for i in 0..3 {
+                    v[p.entry(q, b, i, i)] = if rows[q] == b { deg + 0.05 } else { -1.0 };
+                }
+            }
+        }
+        let mut x = vec![1.0; p.dimension()];
+        assert_eq!(
+            solver.solve_spd(&v, &mut x).unwrap(),
+            Some(Factorization::BlockLu)
+        );
     }
 
     /// A non-symmetric system with node blocks goes to the node-block LU

@@ -10,6 +10,7 @@
 
 pub mod amg;
 pub mod block_lu;
+mod compact;
 mod direct;
 mod faer_failure;
 mod krylov;

@@ -941,7 +941,7 @@ fn chord_steps(
         for (d, g) in ws.dy.iter_mut().zip(&ws.g) {
             *d = -g;
         }
-        if !ws.linear.solve_again(&mut ws.dy) {
+        if !ws.linear.solve_again(&ws.h, &mut ws.dy) {
             return moved;
         }
         system.transform_increment(&mut ws.dy);

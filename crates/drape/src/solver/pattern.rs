@@ -108,6 +108,30 @@ impl SparsePattern {
         Self::new((nx + 1) * (ny + 1), elements.iter().map(|e| e.as_slice()))
     }
 
+    /// The pattern of an `nx x ny` grid of squares cut into triangles
+    /// ([`SparsePattern::triangle_grid`]) widened by couplings two nodes
+    /// apart along the rows — as bending's stencils reach beyond a node's
+    /// triangles —, and the grid's own pattern, its compact part: test
+    /// matrices of the compact preconditioner.
+    #[cfg(test)]
+    pub(crate) fn wide_grid(nx: usize, ny: usize) -> (Self, Self) {
+        let id = |i: usize, j: usize| j * (nx + 1) + i;
+        let (mut triangles, mut wide) = (Vec::new(), Vec::new());
+        for j in 0..ny {
+            for i in 0..nx {
+                triangles.push(vec![id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                triangles.push(vec![id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+                if i + 2 <= nx {
+                    wide.push(vec![id(i, j), id(i + 2, j)]);
+                }
+            }
+        }
+        let nodes = (nx + 1) * (ny + 1);
+        let full = Self::new(nodes, triangles.iter().chain(&wide).map(|e| e.as_slice()));
+        let compact = Self::new(nodes, triangles.iter().map(|e| e.as_slice()));
+        (full, compact)
+    }
+
     /// Number of rows (= columns).
     pub fn dimension(&self) -> usize {
         self.col_ptr.len() - 1
