@@ -5,6 +5,13 @@
 //! The cascade, in the order [`LinearSolver::solve`] tries it (the first
 //! path that succeeds ends it; [`LinearMode`] says which are open):
 //!
+//! 0. **CG with the compact factor** (`compact`; `auto` up to 300,000
+//!    unknowns, with bending): a symmetric system with couplings beyond
+//!    the triangles' (bending's stencils) by conjugate gradients
+//!    preconditioned with the factor of its compact part
+//!    ([`super::compact`]), while that converges in 20 iterations; a
+//!    weak or indefinite try leaves the next systems to the paths below,
+//!    8 of them, then twice as many each time in a row, up to 512.
 //! 1. **Block LU** (`direct`; `auto` up to 300,000 unknowns). Small
 //!    systems — up to 5,000 unknowns when symmetric, 15,000 when not — are
 //!    factorised by the node-block LU of [`super::block_lu`], symmetric
