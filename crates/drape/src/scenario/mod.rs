@@ -544,7 +544,7 @@ pub struct SolverSpec {
     #[serde(default = "default_max_cutbacks")]
     pub max_cutbacks: usize,
     /// Linear solver: `"auto"` (default: `direct` up to 300,000 unknowns,
-    /// `reuse` above), `"direct"` (a fresh sparse factorisation every
+    /// with `compact` first where there is bending; `reuse` above), `"direct"` (a fresh sparse factorisation every
     /// solve), `"iterative"` (block-Jacobi GMRES, no factorisation),
     /// `"reuse"` (GMRES preconditioned by an earlier factorisation) or
     /// `"compact"` (with bending, CG preconditioned by the factor of the

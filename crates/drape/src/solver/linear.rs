@@ -202,9 +202,11 @@ pub enum LinearMode {
     /// preconditioned by the Cholesky factor of the symmetric part when not
     /// symmetric; the node-block LU, then LU, otherwise.
     Direct,
-    /// `direct` up to 300,000 unknowns; above (where a sparse
-    /// factorisation costs tens of seconds and gigabytes) `iterative`, with
-    /// `reuse` as the fallback when multigrid does not converge.
+    /// `direct` up to 300,000 unknowns — with the compact path of
+    /// [`LinearMode::Compact`] first where the solver has a compact part
+    /// (bending) —; above (where a sparse factorisation costs tens of
+    /// seconds and gigabytes) `iterative`, with `reuse` as the fallback
+    /// when multigrid does not converge.
     #[default]
     Auto,
     /// GMRES preconditioned by the Cholesky factor of an earlier Hessian,
