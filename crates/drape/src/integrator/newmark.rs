@@ -32,7 +32,7 @@
 //! figures). Free fall and smooth motion keep `rho = 1`. The converged
 //! steps are the same as with `rho = 1` to the Newton tolerance.
 
-use super::{FrictionLag, State, StepTerms, solve_step};
+use super::{FrictionLag, State, StepTerms, end_gas_steps, gas_steps, solve_step};
 use crate::model::Model;
 use crate::solver::newton::{NewtonError, NewtonReport, NewtonSettings, NewtonWorkspace};
 
@@ -219,6 +219,7 @@ impl Newmark {
                 + dt * state.velocities[i]
                 + theta * dt * dt * state.accelerations[i];
         }
+        let gas = gas_steps(model, state, t1);
         let terms = StepTerms {
             c,
             q: &ws.q,
@@ -228,6 +229,7 @@ impl Newmark {
             time: t1,
             start: Some((&state.positions, dt)),
             friction: FrictionLag::Start,
+            gas: &gas,
         };
         let settings = &NewtonSettings {
             dt: Some(dt),
@@ -255,6 +257,7 @@ impl Newmark {
             state.velocities[i] += (1.0 - gamma) * dt * state.accelerations[i] + gamma * dt * a1;
             work += 0.5 * (old_ext[i] + ws.f_ext[i]) * (y[i] - state.positions[i]);
         }
+        work += end_gas_steps(model, &gas, &ws.y, state);
         state.persistence = persistence(&state.accelerations, &ws.q, &mut ws.ratios);
         state.accelerations.copy_from_slice(&ws.q);
         std::mem::swap(&mut state.positions, &mut ws.y);

@@ -83,7 +83,9 @@ pub enum CavityError {
     },
     /// The surface encloses no volume at the start (a flat bag's coincident
     /// plies): the gas's pressure would be infinite.
-    #[error("it encloses no volume at the start ({volume:e} m^3); give it a shape that encloses some, or a chamber")]
+    #[error(
+        "it encloses no volume at the start ({volume:e} m^3); give it a shape that encloses some, or a chamber"
+    )]
     NoVolume {
         /// The volume (m^3).
         volume: f64,
@@ -427,7 +429,8 @@ fn check_closed(
                 return Err(CavityError::Open {
                     a: a.min(b),
                     b: a.max(b),
-                    why: ": give the cavity an origin to close it by a wall or symmetry plane".into(),
+                    why: ": give the cavity an origin to close it by a wall or symmetry plane"
+                        .into(),
                 });
             };
             let inner = (0..p.saturating_sub(1)).map(|j| el[3 + k * (p - 1) + j]);
@@ -462,7 +465,11 @@ mod tests {
             .iter()
             .flat_map(|x| {
                 let s = (3.0 * x[0] + 1.7 * x[1] - 2.3 * x[2]).sin();
-                [x[0] * (1.0 + 0.1 * s), x[1] - 0.05 * s, x[2] + 0.07 * s * x[0]]
+                [
+                    x[0] * (1.0 + 0.1 * s),
+                    x[1] - 0.05 * s,
+                    x[2] + 0.07 * s * x[0],
+                ]
             })
             .collect()
     }
@@ -492,7 +499,10 @@ mod tests {
         }
         // 320 flat triangles miss 3.4 % of the volume, their curved T6
         // 0.014 %.
-        assert!(errors[0] < 0.04 && errors[1] < 0.01 * errors[0], "{errors:?}");
+        assert!(
+            errors[0] < 0.04 && errors[1] < 0.01 * errors[0],
+            "{errors:?}"
+        );
     }
 
     /// `dV/dY` against central differences of `V`, and the assembled
@@ -516,18 +526,24 @@ mod tests {
             assert!(eg < 1e-8, "order {p}: gradient {eg:e}");
             let hessian = |x: &[f64]| {
                 let mut h = vec![0.0; n * n];
-                c.hessians(x, 1.0, |_| false, |_, el, k| {
-                    let m = 3 * el.len();
-                    for (a, &na) in el.iter().enumerate() {
-                        for (b, &nb) in el.iter().enumerate() {
-                            for i in 0..3 {
-                                for j in 0..3 {
-                                    h[(3 * na + i) * n + 3 * nb + j] += k[(3 * a + i) * m + 3 * b + j];
+                c.hessians(
+                    x,
+                    1.0,
+                    |_| false,
+                    |_, el, k| {
+                        let m = 3 * el.len();
+                        for (a, &na) in el.iter().enumerate() {
+                            for (b, &nb) in el.iter().enumerate() {
+                                for i in 0..3 {
+                                    for j in 0..3 {
+                                        h[(3 * na + i) * n + 3 * nb + j] +=
+                                            k[(3 * a + i) * m + 3 * b + j];
+                                    }
                                 }
                             }
                         }
-                    }
-                });
+                    },
+                );
                 h
             };
             let eh = jacobian_error(gradient, hessian, &y, 1e-6);
@@ -556,8 +572,10 @@ mod tests {
             let mut f = vec![0.0; y.len()];
             let m = 3 * mesh.order.nodes_per_element();
             for el in mesh.elements() {
-                let local: Vec<[f64; 3]> =
-                    el.iter().map(|&a| [y[3 * a], y[3 * a + 1], y[3 * a + 2]]).collect();
+                let local: Vec<[f64; 3]> = el
+                    .iter()
+                    .map(|&a| [y[3 * a], y[3 * a + 1], y[3 * a + 2]])
+                    .collect();
                 let mut fe = vec![0.0; m];
                 add_pressure_force(1.0, &local, &q, &mut fe, None, 1.0);
                 for (a, &node) in el.iter().enumerate() {
@@ -566,7 +584,11 @@ mod tests {
                     }
                 }
             }
-            let worst = g.iter().zip(&f).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            let worst = g
+                .iter()
+                .zip(&f)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
             let scale = f.iter().fold(0.0f64, |s, v| s.max(v.abs()));
             assert!(worst < 1e-13 * scale, "order {p}: {worst:e}");
         }

@@ -336,6 +336,37 @@ impl Gas {
     }
 }
 
+/// The gas at the start of a run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InitialGas {
+    /// Absolute pressure (Pa), unless `mass` is given.
+    pub pressure: f64,
+    /// Mass (kg), if given instead of the pressure.
+    pub mass: Option<f64>,
+    /// Temperature (K).
+    pub temperature: f64,
+}
+
+/// A cavity of the fabric and the gas in it.
+#[derive(Debug, Clone)]
+pub struct GasCavity {
+    /// The surface that encloses it.
+    pub surface: super::cavity::Cavity,
+    /// The gas.
+    pub gas: Gas,
+    /// The gas at the start.
+    pub initial: InitialGas,
+}
+
+impl GasCavity {
+    /// The gas's state at positions `y` at the start of a run.
+    pub fn initial_state(&self, y: &[f64]) -> GasState {
+        let i = self.initial;
+        self.gas
+            .initial(self.surface.volume(y), i.pressure, i.mass, i.temperature)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
