@@ -169,7 +169,8 @@ pub struct StepOutcome {
 
 impl Newmark {
     /// The initial state at rest in the initial configuration, with `A_0 =
-    /// M^{-1} (F_ext(0) - F_int(X))` (zero at fixed components).
+    /// M^{-1} (F_ext(0) - F_int(X))` (zero at fixed components; `F_ext`
+    /// with the cavities' gas).
     pub fn initial_state(
         &self,
         model: &Model,
@@ -182,6 +183,19 @@ impl Newmark {
         model.assemble(&x, &mut ws.f_int, None);
         model.add_pressure(&x, model.pressure_at(0.0, None), &mut ws.f_ext, None);
         let mut rhs: Vec<f64> = (0..n).map(|i| ws.f_ext[i] - ws.f_int[i]).collect();
+        // The gas's net pressure on its cavity, `(p_0 - p_amb) dV/dY` (not
+        // in `f_ext`: its work is counted by the gas's law, `super::end_gas_steps`).
+        if !model.cavities().is_empty() {
+            let mut dv = vec![0.0; n];
+            for cavity in model.cavities() {
+                let gas = cavity.initial_state(&x);
+                cavity.surface.volume_gradient(&x, &mut dv);
+                let net = gas.pressure - cavity.gas.ambient;
+                for (r, d) in rhs.iter_mut().zip(&dv) {
+                    *r += net * d;
+                }
+            }
+        }
         let (m, linear) = ws.newton.matrix_and_solver();
         m.fill(0.0);
         model.add_mass_to_hessian(1.0, m);

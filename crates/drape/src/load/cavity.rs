@@ -50,13 +50,13 @@ use std::collections::HashMap;
 #[non_exhaustive]
 pub enum CavityError {
     /// No triangles were selected.
-    #[error("it has no triangles")]
+    #[error("has no triangles")]
     Empty,
     /// An edge of the surface belongs to one of its triangles only, and
     /// no apex closes it (or its node is neither held nor on a symmetry
     /// plane through the apex).
     #[error(
-        "it is not closed: the edge between nodes {a} and {b} (0-based) belongs to one of its triangles only{why}"
+        "is not closed: the edge between nodes {a} and {b} (0-based) belongs to one of its triangles only{why}"
     )]
     Open {
         /// The open edge's corner nodes.
@@ -69,7 +69,7 @@ pub enum CavityError {
     /// Two triangles run through their shared edge in the same direction:
     /// their normals disagree, and the volume has no sign.
     #[error(
-        "its triangles are not consistently oriented: elements {first} and {second} run through their edge between nodes {a} and {b} in the same direction"
+        "is not consistently oriented: elements {first} and {second} run through their edge between nodes {a} and {b} in the same direction"
     )]
     Misoriented {
         /// The edge's nodes.
@@ -84,7 +84,7 @@ pub enum CavityError {
     /// The surface encloses no volume at the start (a flat bag's coincident
     /// plies): the gas's pressure would be infinite.
     #[error(
-        "it encloses no volume at the start ({volume:e} m^3); give it a shape that encloses some, or a chamber"
+        "encloses no volume at the start ({volume:e} m^3); give it a shape that encloses some, or a chamber"
     )]
     NoVolume {
         /// The volume (m^3).
