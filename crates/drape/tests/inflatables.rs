@@ -127,10 +127,10 @@ fn thin_sphere_stretch(mass: f64, r0: f64, ty: f64, nu: f64, rt: f64) -> f64 {
 #[test]
 fn balloon_radius_matches_the_thin_sphere() {
     let (r0, e, t, nu, r_gas, temp) = (0.1, 1.0e6, 5.0e-4, 0.3, 287.05, 293.15);
-    for target in [1.05, 1.3] {
+    for target in [1.05f64, 1.3] {
         // The mass that gives about `target` (the test's stretch is the
         // bisection's, not this guess).
-        let v = 4.0 / 3.0 * std::f64::consts::PI * (r0 * target as f64).powi(3);
+        let v = 4.0 / 3.0 * std::f64::consts::PI * (r0 * target).powi(3);
         let p = AMBIENT + t * e * (target - 1.0 / target) / ((1.0 - nu) * r0);
         let mass = p * v / (r_gas * temp);
         let text = format!(

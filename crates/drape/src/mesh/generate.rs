@@ -250,58 +250,6 @@ pub fn elevate(mesh: &Mesh, order: ElementOrder) -> Mesh {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn total_area(mesh: &Mesh) -> f64 {
-        let g = crate::element::ElementGeometry::new(
-            mesh,
-            &crate::quadrature::QuadratureRule::of_degree(2 * mesh.order.degree()),
-        );
-        (0..mesh.element_count()).map(|e| g.area(e)).sum()
-    }
-
-    #[test]
-    fn rectangles_are_valid_and_have_the_right_area_and_counts() {
-        for order in [
-            ElementOrder::Linear,
-            ElementOrder::Quadratic,
-            ElementOrder::Cubic,
-        ] {
-            for pattern in [Pattern::Right, Pattern::Left, Pattern::Alternate] {
-                let m = rectangle([0.2, 0.3], [4, 6], pattern, [1.0, 2.0, 3.0], order);
-                m.validate().unwrap();
-                let p = order.degree();
-                assert_eq!(m.node_count(), (4 * p + 1) * (6 * p + 1));
-                assert_eq!(m.element_count(), 48);
-                assert!((total_area(&m) - 0.06).abs() < 1e-14);
-                assert_eq!(m.boundary_nodes().len(), 2 * (4 * p + 6 * p));
-            }
-        }
-    }
-
-    #[test]
-    fn discs_are_valid_and_converge_to_the_circle_area() {
-        let exact = std::f64::consts::PI * 0.15f64.powi(2);
-        let mut previous = f64::INFINITY;
-        for order in [
-            ElementOrder::Linear,
-            ElementOrder::Quadratic,
-            ElementOrder::Cubic,
-        ] {
-            let m = disc(0.15, 5, [0.0; 3], order);
-            m.validate().unwrap();
-            assert_eq!(m.element_count(), 6 * 25);
-            let error = (total_area(&m) - exact).abs() / exact;
-            assert!(error < previous, "{order:?}: {error}");
-            previous = error;
-        }
-        // Curved rims: the quadratic disc is much closer to the circle.
-        assert!(previous < 1e-4);
-    }
-}
-
 /// A closed sphere of radius `radius` about `center`: the icosahedron's
 /// twenty triangles, each edge cut in two `subdivisions` times (`20 4^s`
 /// triangles), every node (the elevated ones too) projected onto the
@@ -389,4 +337,56 @@ pub fn sphere(radius: f64, subdivisions: usize, center: [f64; 3], order: Element
         ];
     }
     mesh
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn total_area(mesh: &Mesh) -> f64 {
+        let g = crate::element::ElementGeometry::new(
+            mesh,
+            &crate::quadrature::QuadratureRule::of_degree(2 * mesh.order.degree()),
+        );
+        (0..mesh.element_count()).map(|e| g.area(e)).sum()
+    }
+
+    #[test]
+    fn rectangles_are_valid_and_have_the_right_area_and_counts() {
+        for order in [
+            ElementOrder::Linear,
+            ElementOrder::Quadratic,
+            ElementOrder::Cubic,
+        ] {
+            for pattern in [Pattern::Right, Pattern::Left, Pattern::Alternate] {
+                let m = rectangle([0.2, 0.3], [4, 6], pattern, [1.0, 2.0, 3.0], order);
+                m.validate().unwrap();
+                let p = order.degree();
+                assert_eq!(m.node_count(), (4 * p + 1) * (6 * p + 1));
+                assert_eq!(m.element_count(), 48);
+                assert!((total_area(&m) - 0.06).abs() < 1e-14);
+                assert_eq!(m.boundary_nodes().len(), 2 * (4 * p + 6 * p));
+            }
+        }
+    }
+
+    #[test]
+    fn discs_are_valid_and_converge_to_the_circle_area() {
+        let exact = std::f64::consts::PI * 0.15f64.powi(2);
+        let mut previous = f64::INFINITY;
+        for order in [
+            ElementOrder::Linear,
+            ElementOrder::Quadratic,
+            ElementOrder::Cubic,
+        ] {
+            let m = disc(0.15, 5, [0.0; 3], order);
+            m.validate().unwrap();
+            assert_eq!(m.element_count(), 6 * 25);
+            let error = (total_area(&m) - exact).abs() / exact;
+            assert!(error < previous, "{order:?}: {error}");
+            previous = error;
+        }
+        // Curved rims: the quadratic disc is much closer to the circle.
+        assert!(previous < 1e-4);
+    }
 }
