@@ -42,4 +42,6 @@ pub const ALL: &[(&str, &str)] = &[
         "folding-cloth",
         include_str!("../../../examples/folding-cloth.toml"),
     ),
+    ("balloon", include_str!("../../../examples/balloon.toml")),
+    ("cushion", include_str!("../../../examples/cushion.toml")),
 ];
