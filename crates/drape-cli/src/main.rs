@@ -283,12 +283,12 @@ fn check(path: &Path) -> Result<(), Failure> {
             format!(", {}", flows.join(" and "))
         };
         println!(
-            "  cavity {i}  {} triangles enclosing {} m^3, {law} gas: {} kg at {} Pa, {} K{flows}",
+            "  cavity {i}  {} triangles enclosing {:.6e} m^3, {law} gas: {:.6e} kg at {:.1} Pa, {:.2} K{flows}",
             cavity.surface.elements().len(),
-            human(gas.volume),
-            human(gas.mass),
-            human(gas.pressure),
-            human(gas.temperature)
+            gas.volume,
+            gas.mass,
+            gas.pressure,
+            gas.temperature
         );
     }
     if let Some(sc) = m.self_contact() {

@@ -306,7 +306,8 @@ fn cavity_panels(hist: &History) -> Vec<Panel> {
             if let Some(v) = column(hist, &format!("cavity{i}_{flow}"))
                 && v.iter().any(|&x| x != 0.0)
             {
-                let mut s = Series::line(&format!("cavity {i} {flow}"), v, palette(i));
+                let mut s =
+                    Series::line(&format!("cavity {i} {flow}"), v, palette(count + 2 * i + k));
                 s.dashed = k == 1;
                 s.points = k == 0;
                 panels[2].series.push(s);
