@@ -44,4 +44,8 @@ pub const ALL: &[(&str, &str)] = &[
     ),
     ("balloon", include_str!("../../../examples/balloon.toml")),
     ("cushion", include_str!("../../../examples/cushion.toml")),
+    (
+        "folded-bag",
+        include_str!("../../../examples/folded-bag.toml"),
+    ),
 ];
