@@ -682,3 +682,37 @@ fn a_folded_bag_deploys_to_the_flat_bags_volume_without_crossing() {
     // Deployed: a hundred times the folded bag's initial volume.
     assert!(folded > 0.001, "{folded}");
 }
+
+/// A cavity without `pieces` takes the whole mesh: an open disc is
+/// refused at the `[[cavity]]` header's line; with `origin` on the
+/// disc's plane and its rim held it is closed by that plane, and the
+/// rim held only in x and y (free to leave the plane) is refused naming
+/// a rim node.
+#[test]
+fn an_open_surface_is_closed_by_a_plane_through_the_origin_only_where_held() {
+    let disc = "[mesh]\nshape = \"disc\"\nradius = 0.1\nrings = 3\n\
+        [material]\nyoungs_modulus = 1.0e6\npoisson_ratio = 0.3\ndensity = 500.0\nthickness = 5.0e-4\n";
+    assert_error(
+        &format!("{disc}[[cavity]]\ngas = \"isothermal\"\nchamber = 1.0e-3\n"),
+        10,
+        "cavity[0].pieces",
+        &["(none given: every triangle of the mesh)", "is not closed"],
+    );
+    let closed = format!(
+        "{disc}[[cavity]]\ngas = \"isothermal\"\norigin = [0.0, 0.0, 0.0]\nchamber = 1.0e-3\n[[fix]]\nboundary = true\n[analysis]\nkind = \"static\"\n"
+    );
+    let s = build(&closed, Path::new("test.toml")).unwrap();
+    let v = s.model.cavities()[0]
+        .surface
+        .volume(&s.model.initial_positions());
+    assert!((v - 1.0e-3).abs() < 1e-15, "a flat disc on its plane: {v}");
+    assert_error(
+        &closed.replace(
+            "boundary = true\n",
+            "boundary = true\ncomponents = [\"x\", \"y\"]\n",
+        ),
+        10,
+        "cavity[0].pieces",
+        &["neither held in all three components nor held on a symmetry plane"],
+    );
+}

@@ -120,7 +120,10 @@ impl Cavity {
     /// `chamber` (m^3, >= 0). Without an apex it is the centroid of the
     /// surface's nodes (any point gives the same volume of a closed
     /// surface; a near one keeps the round-off small). Its orientation is
-    /// taken from its initial volume, which must not be zero.
+    /// taken from its initial volume, which must not be zero unless a
+    /// chamber gives the cavity one: a surface that encloses none (a disc
+    /// on its own closing plane) is taken with its normals pointing out
+    /// of the cavity.
     pub fn new(
         mesh: &Mesh,
         elements: Vec<usize>,

@@ -158,16 +158,12 @@ fn build_cavity(
         None => 0.0,
     };
     let surface = Cavity::new(mesh, elements, spec.origin, chamber, fixed).map_err(|e| {
-        let key = if spec.pieces.is_some() {
-            "pieces"
-        } else {
-            "gas"
-        };
+        // At `pieces`' line, or the table's header without it.
         let what = match &spec.pieces {
             Some(p) => format!("= {p:?} selects a surface that"),
-            None => "(the whole mesh, no `pieces`): the surface".into(),
+            None => "(none given: every triangle of the mesh) selects a surface that".into(),
         };
-        c.invalid(t, ix, key, format!("{what} {e}"))
+        c.invalid(t, ix, "pieces", format!("{what} {e}"))
     })?;
     let ambient = match spec.ambient {
         Some(v) if !(v.is_finite() && v >= 0.0) => {
