@@ -42,4 +42,10 @@ pub const ALL: &[(&str, &str)] = &[
         "folding-cloth",
         include_str!("../../../examples/folding-cloth.toml"),
     ),
+    ("balloon", include_str!("../../../examples/balloon.toml")),
+    ("cushion", include_str!("../../../examples/cushion.toml")),
+    (
+        "folded-bag",
+        include_str!("../../../examples/folded-bag.toml"),
+    ),
 ];

@@ -261,6 +261,36 @@ fn check(path: &Path) -> Result<(), Failure> {
     };
     println!("  mass      {:.6e} kg ({mass_kind})", m.total_mass());
     println!("  loads     {}", m.loads().len());
+    let x = m.initial_positions();
+    for (i, cavity) in m.cavities().iter().enumerate() {
+        let gas = cavity.initial_state(&x);
+        let law = match cavity.gas.law {
+            drape::load::gas::GasLaw::Isothermal => "isothermal",
+            drape::load::gas::GasLaw::Adiabatic => "adiabatic",
+        };
+        let mut flows = Vec::new();
+        if cavity.gas.inflator.is_some() {
+            flows.push("an inflator".to_string());
+        }
+        match cavity.gas.vents.len() {
+            0 => {}
+            1 => flows.push("a vent".into()),
+            n => flows.push(format!("{n} vents")),
+        }
+        let flows = if flows.is_empty() {
+            String::new()
+        } else {
+            format!(", {}", flows.join(" and "))
+        };
+        println!(
+            "  cavity {i}  {} triangles enclosing {:.6e} m^3, {law} gas: {:.6e} kg at {:.1} Pa, {:.2} K{flows}",
+            cavity.surface.elements().len(),
+            gas.volume,
+            gas.mass,
+            gas.pressure,
+            gas.temperature
+        );
+    }
     if let Some(sc) = m.self_contact() {
         let friction = if sc.friction() > 0.0 {
             format!("friction {} between the layers", human(sc.friction()))

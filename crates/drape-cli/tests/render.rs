@@ -53,6 +53,13 @@ fn render_grid_animation_and_plot_work_on_every_example() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    // The meshes some examples read, beside their shortened copies.
+    let meshes = dir.join("meshes");
+    std::fs::create_dir_all(&meshes).unwrap();
+    for entry in std::fs::read_dir(examples.join("meshes")).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(&path, meshes.join(path.file_name().unwrap())).unwrap();
+    }
     let mut files: Vec<PathBuf> = std::fs::read_dir(&examples)
         .unwrap()
         .map(|e| e.unwrap().path())

@@ -261,17 +261,60 @@ fn title_and_note(dir: &Path) -> (String, Option<String>) {
 /// The panels of a history, in order: the monitors' heights, the
 /// energies, Newton's iterations, the contact force, the wrinkling state
 /// (labelled for a material with or without a tension field, when the
-/// scenario says which) and the smallest gap.
+/// scenario says which) and the smallest gap; with `[[cavity]]` columns
+/// (`cavity<i>_...`), the cavities' pressure, volume and gas mass.
 fn history_panels(hist: &History, monitors: &[String], tension_field: Option<bool>) -> Vec<Panel> {
     let has_obstacles = column(hist, "min_gap").is_some_and(|v| v.iter().any(|x| x.is_finite()));
-    vec![
+    let mut panels = vec![
         monitor_panel(hist, monitors),
         energy_panel(hist),
         iteration_panel(hist),
         contact_force_panel(hist, has_obstacles),
         wrinkling_panel(hist, tension_field),
         gap_panel(hist, has_obstacles),
-    ]
+    ];
+    panels.extend(cavity_panels(hist));
+    panels
+}
+
+/// With cavities: each cavity's absolute pressure, volume and gas mass
+/// (with its inflow and vent outflow where an inflator or vents moved
+/// gas), one panel each; none without.
+fn cavity_panels(hist: &History) -> Vec<Panel> {
+    let count = (0..)
+        .take_while(|i| hist.column(&format!("cavity{i}_pressure")).is_some())
+        .count();
+    if count == 0 {
+        return Vec::new();
+    }
+    let mut panels = vec![
+        Panel::new("Cavities: gas pressure (absolute)", "pressure (Pa)"),
+        Panel::new("Cavities: volume", "volume (m³)"),
+        Panel::new("Cavities: gas mass", "mass (kg)"),
+    ];
+    for i in 0..count {
+        for (panel, (suffix, label)) in panels.iter_mut().zip([
+            ("pressure", format!("cavity {i}")),
+            ("volume", format!("cavity {i}")),
+            ("mass", format!("cavity {i}")),
+        ]) {
+            if let Some(v) = column(hist, &format!("cavity{i}_{suffix}")) {
+                panel.series.push(Series::line(&label, v, palette(i)));
+            }
+        }
+        for (k, flow) in ["inflow", "outflow"].iter().enumerate() {
+            if let Some(v) = column(hist, &format!("cavity{i}_{flow}"))
+                && v.iter().any(|&x| x != 0.0)
+            {
+                let mut s =
+                    Series::line(&format!("cavity {i} {flow}"), v, palette(count + 2 * i + k));
+                s.dashed = k == 1;
+                s.points = k == 0;
+                panels[2].series.push(s);
+            }
+        }
+    }
+    panels
 }
 
 /// The column `name` of `hist`, if it has one.

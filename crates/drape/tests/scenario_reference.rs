@@ -73,12 +73,13 @@ fn readme() -> String {
 }
 
 /// The tables whose keys are fixed, with a probe giving an unknown key.
-const TABLES: [(&str, &str); 13] = [
+const TABLES: [(&str, &str); 14] = [
     ("top level", "zzz = 1\n"),
     ("`[mesh]`", "[mesh]\nzzz = 1\n"),
     ("`[material]`", "[material]\nzzz = 1\n"),
     ("`[[load]]`", "[[load]]\nzzz = 1\n"),
     ("`[[fix]]`", "[[fix]]\nzzz = 1\n"),
+    ("`[[cavity]]`", "[[cavity]]\nzzz = 1\n"),
     ("`[analysis]`", "[analysis]\nzzz = 1\n"),
     ("`[time]`", "[time]\nzzz = 1\n"),
     ("`[solver]`", "[solver]\nzzz = 1\n"),
@@ -91,10 +92,20 @@ const TABLES: [(&str, &str); 13] = [
 
 /// Tables inside a table, documented as `key.inner` in their table's
 /// section: the section, the prefix and the probe of their keys.
-const NESTED: [(&str, &str, &str); 3] = [
+const NESTED: [(&str, &str, &str); 5] = [
     ("`[time]`", "rest.", "[time]\nrest = { zzz = 1 }\n"),
     ("`[material]`", "kes.", "[material]\nkes = { zzz = 1 }\n"),
     ("`[material]`", "fast.", "[material]\nfast = { zzz = 1 }\n"),
+    (
+        "`[[cavity]]`",
+        "inflator.",
+        "[[cavity]]\ninflator = { zzz = 1 }\n",
+    ),
+    (
+        "`[[cavity]]`",
+        "vent.",
+        "[[cavity]]\n[[cavity.vent]]\nzzz = 1\n",
+    ),
 ];
 
 /// The choices of a table read apart: its heading, its tag, and a probe
@@ -223,6 +234,8 @@ fn readme_documents_every_value_of_each_choice() {
             "[material]\nwrinkling = \"zzz\"\n",
         ),
         ("`[[obstacle]]`", "shape", obstacle.as_str()),
+        ("`[[cavity]]`", "gas", "[[cavity]]\ngas = \"zzz\"\n"),
+        ("`[mesh]`", "shape", "[mesh]\nshape = \"zzz\"\n"),
         ("`[contact]`", "method", contact.as_str()),
     ];
     for (heading, key, probe) in choices {

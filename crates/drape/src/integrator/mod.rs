@@ -13,15 +13,17 @@ pub use statics::StaticStepper;
 
 use crate::contact::lagrange::{ActiveNode, MAX_ACTIVE_SET_ROUNDS, REVISIONS_IN_NEWTON};
 use crate::contact::{ContactMethod, ContactModel, ContactState};
+use crate::load::gas::{GasState, GasStep};
 use crate::material::CRITICAL_STRETCH;
 use crate::model::Model;
+use crate::solver::low_rank::LowRank;
 use crate::solver::newton::{
     self, Evaluation, NewtonError, NewtonReport, NewtonSettings, NewtonSystem, NewtonWorkspace,
 };
 use potential::{IncrementalPotential, StepContext, StepTerm};
 use terms::{
-    BendingTerm, FrictionTerm, InertiaTerm, LoadTerm, MembraneTerm, PenaltyTerm, SelfContactTerm,
-    SelfFrictionTerm,
+    BendingTerm, FrictionTerm, GasTerm, InertiaTerm, LoadTerm, MembraneTerm, PenaltyTerm,
+    SelfContactTerm, SelfFrictionTerm,
 };
 
 /// The state carried from step to step.
@@ -48,6 +50,8 @@ pub struct State {
     pub friction_dissipation: f64,
     /// Contact features, active set and multipliers (with obstacles).
     pub contact: Option<ContactState>,
+    /// The gas of each of the model's cavities (none without).
+    pub gas: Vec<GasState>,
 }
 
 impl State {
@@ -55,6 +59,11 @@ impl State {
     pub fn at_rest(model: &Model, positions: Vec<f64>) -> Self {
         let n = positions.len();
         let contact = model.contact().map(|c| c.initial_state(&positions));
+        let gas = model
+            .cavities()
+            .iter()
+            .map(|c| c.initial_state(&positions))
+            .collect();
         Self {
             time: 0.0,
             positions,
@@ -64,6 +73,7 @@ impl State {
             external_work: 0.0,
             friction_dissipation: 0.0,
             contact,
+            gas,
         }
     }
 }
@@ -109,6 +119,9 @@ pub(crate) struct StepSystem<'a> {
     /// The Hessian's layout grown with self-contact's pairs, when the step
     /// uses one ([`grown`]): Newton's Hessian is on its pattern.
     pub grown: Option<&'a mut grown::Grown>,
+    /// The terms' low-rank parts at the last evaluation with a Hessian
+    /// (the gas's), zero on the held components.
+    pub low_rank: LowRank,
 }
 
 impl NewtonSystem for StepSystem<'_> {
@@ -145,6 +158,17 @@ impl NewtonSystem for StepSystem<'_> {
                 value
             }
         };
+        if h.is_some() {
+            self.low_rank.clear();
+            self.potential.low_rank(&mut self.low_rank);
+            for u in &mut self.low_rank.vectors {
+                for (ui, &held) in u.iter_mut().zip(model.fixed()) {
+                    if held {
+                        *ui = 0.0;
+                    }
+                }
+            }
+        }
         self.strain_energy = self.potential.value("membrane").map_or(0.0, |v| v.value);
         self.bending_energy = self.potential.value("bending").map_or(0.0, |v| v.value);
         self.self_contact_energy = self
@@ -179,6 +203,10 @@ impl NewtonSystem for StepSystem<'_> {
             energy: value.energy.filter(|_| merit.is_none()),
             merit,
         }
+    }
+
+    fn low_rank(&self) -> Option<&LowRank> {
+        (!self.low_rank.is_empty()).then_some(&self.low_rank)
     }
 
     fn transform_increment(&self, dy: &mut [f64]) {
@@ -233,6 +261,30 @@ impl NewtonSystem for StepSystem<'_> {
     }
 }
 
+/// Each cavity's gas over the step from `state` to `t1`: the flows
+/// over the step and the law it follows (`load::gas`).
+pub(crate) fn gas_steps(model: &Model, state: &State, t1: f64) -> Vec<GasStep> {
+    model
+        .cavities()
+        .iter()
+        .zip(&state.gas)
+        .map(|(c, s)| c.gas.begin_step(s, state.time, t1))
+        .collect()
+}
+
+/// Ends the gas's steps at the solution `y`: each cavity's new state into
+/// `state.gas`; returns the gas's work on the fabric over the step, net of
+/// ambient (J).
+pub(crate) fn end_gas_steps(model: &Model, steps: &[GasStep], y: &[f64], state: &mut State) -> f64 {
+    let mut work = 0.0;
+    for ((c, step), s) in model.cavities().iter().zip(steps).zip(&mut state.gas) {
+        let v = c.surface.volume(y);
+        work += step.work(v);
+        *s = c.gas.end_step(step, v);
+    }
+    work
+}
+
 /// The energies of a step's solution (J): the fabric's strain energy by
 /// part — the membrane's and the bending's (0 without bending) — and
 /// what friction dissipated over the step.
@@ -276,6 +328,8 @@ pub(crate) struct StepTerms<'a> {
     pub start: Option<(&'a [f64], f64)>,
     /// Where friction lags its normal force from.
     pub friction: FrictionLag<'a>,
+    /// The gas of each cavity over the step (none without cavities).
+    pub gas: &'a [GasStep],
 }
 
 /// Where a step's friction takes its normal forces and tangent planes
@@ -319,6 +373,9 @@ fn step_potential<'a>(
         terms.pressure,
         f_ext,
     )));
+    if !terms.gas.is_empty() {
+        list.push(Box::new(GasTerm::new(model, terms.gas)));
+    }
     if terms.c != 0.0 {
         list.push(Box::new(InertiaTerm::new(
             model,
@@ -461,6 +518,7 @@ pub(crate) fn solve_step(
             projecting: false,
             can_project,
             grown: grown.as_mut(),
+            low_rank: LowRank::default(),
         };
         let result = newton::solve(&mut system, y, length, settings, ws);
         let strain = StepEnergies {

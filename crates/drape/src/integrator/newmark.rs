@@ -32,7 +32,7 @@
 //! figures). Free fall and smooth motion keep `rho = 1`. The converged
 //! steps are the same as with `rho = 1` to the Newton tolerance.
 
-use super::{FrictionLag, State, StepTerms, solve_step};
+use super::{FrictionLag, State, StepTerms, end_gas_steps, gas_steps, solve_step};
 use crate::model::Model;
 use crate::solver::newton::{NewtonError, NewtonReport, NewtonSettings, NewtonWorkspace};
 
@@ -180,7 +180,8 @@ pub struct StepOutcome {
 
 impl Newmark {
     /// The initial state at rest in the initial configuration, with `A_0 =
-    /// M^{-1} (F_ext(0) - F_int(X))` (zero at fixed components).
+    /// M^{-1} (F_ext(0) - F_int(X))` (zero at fixed components; `F_ext`
+    /// with the cavities' gas).
     pub fn initial_state(
         &self,
         model: &Model,
@@ -193,6 +194,19 @@ impl Newmark {
         model.assemble(&x, &mut ws.f_int, None);
         model.add_pressure(&x, model.pressure_at(0.0, None), &mut ws.f_ext, None);
         let mut rhs: Vec<f64> = (0..n).map(|i| ws.f_ext[i] - ws.f_int[i]).collect();
+        // The gas's net pressure on its cavity, `(p_0 - p_amb) dV/dY` (not
+        // in `f_ext`: its work is counted by the gas's law, `super::end_gas_steps`).
+        if !model.cavities().is_empty() {
+            let mut dv = vec![0.0; n];
+            for cavity in model.cavities() {
+                let gas = cavity.initial_state(&x);
+                cavity.surface.volume_gradient(&x, &mut dv);
+                let net = gas.pressure - cavity.gas.ambient;
+                for (r, d) in rhs.iter_mut().zip(&dv) {
+                    *r += net * d;
+                }
+            }
+        }
         let (m, linear) = ws.newton.matrix_and_solver();
         m.fill(0.0);
         model.add_mass_to_hessian(1.0, m);
@@ -230,6 +244,7 @@ impl Newmark {
                 + dt * state.velocities[i]
                 + theta * dt * dt * state.accelerations[i];
         }
+        let gas = gas_steps(model, state, t1);
         let terms = StepTerms {
             c,
             q: &ws.q,
@@ -239,6 +254,7 @@ impl Newmark {
             time: t1,
             start: Some((&state.positions, dt)),
             friction: FrictionLag::Start,
+            gas: &gas,
         };
         let settings = &NewtonSettings {
             dt: Some(dt),
@@ -266,6 +282,7 @@ impl Newmark {
             state.velocities[i] += (1.0 - gamma) * dt * state.accelerations[i] + gamma * dt * a1;
             work += 0.5 * (old_ext[i] + ws.f_ext[i]) * (y[i] - state.positions[i]);
         }
+        work += end_gas_steps(model, &gas, &ws.y, state);
         state.persistence = persistence(&state.accelerations, &ws.q, &mut ws.ratios);
         state.accelerations.copy_from_slice(&ws.q);
         std::mem::swap(&mut state.positions, &mut ws.y);

@@ -152,6 +152,14 @@ pub trait StepTerm {
     fn max_step(&self, _ctx: &StepContext, _y: &[f64], _dy: &[f64]) -> f64 {
         1.0
     }
+
+    /// The symmetric low-rank part of the term's Hessian at its last
+    /// evaluation with one, which [`add`](Self::add) left out of `h` (the
+    /// gas's `-dp/dV g g^T`, dense): Newton's solves add it by Woodbury's
+    /// identity (`solver::low_rank`). Default: none.
+    fn low_rank(&self) -> Option<&crate::solver::low_rank::LowRank> {
+        None
+    }
 }
 
 /// The sum of the terms at one evaluation.
@@ -261,6 +269,17 @@ impl<'a> IncrementalPotential<'a> {
             .iter()
             .map(|t| t.max_step(ctx, y, dy))
             .fold(1.0, f64::min)
+    }
+
+    /// The terms' low-rank parts ([`StepTerm::low_rank`]) appended to
+    /// `out`.
+    pub fn low_rank(&self, out: &mut crate::solver::low_rank::LowRank) {
+        for t in &self.terms {
+            if let Some(low) = t.low_rank() {
+                out.vectors.extend(low.vectors.iter().cloned());
+                out.coefficients.extend_from_slice(&low.coefficients);
+            }
+        }
     }
 
     /// The names of the terms, in order.

@@ -28,7 +28,7 @@
 //! run reports as friction's ([`FrictionShortfall`]).
 
 use super::terms::{FrictionTerm, SelfFrictionTerm};
-use super::{FrictionLag, State, StepTerms, merge_reports, solve_step};
+use super::{FrictionLag, State, StepTerms, end_gas_steps, gas_steps, merge_reports, solve_step};
 use crate::integrator::newmark::{DynamicWorkspace, FrictionShortfall, StepOutcome};
 use crate::model::Model;
 use crate::solver::newton::{NewtonError, NewtonSettings};
@@ -74,6 +74,9 @@ impl StaticStepper {
         ws.y.copy_from_slice(&state.positions);
         ws.friction_shortfall = None;
         let rounds = has_friction(model);
+        // A fixed gas (no inflator or vents in statics: the scenario's
+        // check) over the increment.
+        let gas = gas_steps(model, state, from + lambda);
         let start_contact = if rounds { state.contact.clone() } else { None };
         // The contact state of the round lagged from, the forces lagged,
         // the stick round's tangential force.
@@ -99,6 +102,7 @@ impl StaticStepper {
                 time: lambda,
                 start: Some((&state.positions, dlambda)),
                 friction,
+                gas: &gas,
             };
             let solved = solve_step(
                 model,
@@ -147,6 +151,7 @@ impl StaticStepper {
         for i in 0..ws.y.len() {
             work += 0.5 * (ws.old_ext[i] + ws.f_ext[i]) * (ws.y[i] - state.positions[i]);
         }
+        work += end_gas_steps(model, &gas, &ws.y, state);
         std::mem::swap(&mut state.positions, &mut ws.y);
         state.time = from + lambda;
         state.external_work += work;

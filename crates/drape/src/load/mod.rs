@@ -1,6 +1,8 @@
 //! External loads (docs/theory.md §1.5): dead surface loads, gravity, follower
 //! pressure and nodal forces, each with an optional linear ramp.
 
+pub mod cavity;
+pub mod gas;
 pub mod pressure;
 
 /// What a load is.

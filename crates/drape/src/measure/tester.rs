@@ -412,6 +412,7 @@ fn specimen_of(
             Ok((largest, "initial rim".into(), None))
         }
         MeshShape::Rectangle => Err(not_a_disc("the [mesh] is a rectangle, not a disc".into())),
+        MeshShape::Sphere => Err(not_a_disc("the [mesh] is a sphere, not a disc".into())),
     }
 }
 

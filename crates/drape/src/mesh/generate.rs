@@ -250,6 +250,95 @@ pub fn elevate(mesh: &Mesh, order: ElementOrder) -> Mesh {
     }
 }
 
+/// A closed sphere of radius `radius` about `center`: the icosahedron's
+/// twenty triangles, each edge cut in two `subdivisions` times (`20 4^s`
+/// triangles), every node (the elevated ones too) projected onto the
+/// sphere; the triangles' normals (right-hand rule over the node order)
+/// point outwards.
+pub fn sphere(radius: f64, subdivisions: usize, center: [f64; 3], order: ElementOrder) -> Mesh {
+    let t = (1.0 + 5.0f64.sqrt()) / 2.0;
+    let mut nodes: Vec<[f64; 3]> = vec![
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
+    ];
+    let mut triangles: Vec<[usize; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    let unit = |x: [f64; 3]| {
+        let r = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
+        [x[0] / r, x[1] / r, x[2] / r]
+    };
+    for _ in 0..subdivisions {
+        let mut middle: std::collections::HashMap<(usize, usize), usize> =
+            std::collections::HashMap::new();
+        let mut finer = Vec::with_capacity(4 * triangles.len());
+        for tri in &triangles {
+            let mut mid = |a: usize, b: usize| {
+                *middle.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                    let (x, y) = (nodes[a], nodes[b]);
+                    nodes.push([
+                        0.5 * (x[0] + y[0]),
+                        0.5 * (x[1] + y[1]),
+                        0.5 * (x[2] + y[2]),
+                    ]);
+                    nodes.len() - 1
+                })
+            };
+            let [a, b, c] = *tri;
+            let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
+            finer.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        triangles = finer;
+        for x in nodes.iter_mut() {
+            *x = unit(*x);
+        }
+    }
+    let linear = Mesh {
+        nodes: nodes.iter().map(|&x| unit(x)).collect(),
+        order: ElementOrder::Linear,
+        connectivity: triangles.concat(),
+    };
+    let mut mesh = elevate(&linear, order);
+    for x in mesh.nodes.iter_mut() {
+        let u = unit(*x);
+        *x = [
+            center[0] + radius * u[0],
+            center[1] + radius * u[1],
+            center[2] + radius * u[2],
+        ];
+    }
+    mesh
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -19,6 +19,7 @@ use crate::contact::self_contact::{SelfContact, SelfContactSpec};
 use crate::element::ElementGeometry;
 use crate::element::geometry::MembraneIntegration;
 use crate::element::membrane::Section;
+use crate::load::gas::GasCavity;
 use crate::load::pressure::PressureQuadrature;
 use crate::load::{Load, LoadKind};
 use crate::material::Material;
@@ -88,6 +89,8 @@ pub struct Model {
     bending: Option<Bending>,
     /// Self-contact, if any.
     self_contact: Option<SelfContact>,
+    /// The cavities filled with gas (none: no gas term).
+    cavities: Vec<GasCavity>,
 }
 
 /// The parts of a [`Model`] ([`Model::builder`]), built into it at once by
@@ -109,9 +112,17 @@ pub struct ModelBuilder {
     clamped: Vec<bool>,
     self_contact: Option<SelfContactSpec>,
     membrane: MembraneIntegration,
+    cavities: Vec<GasCavity>,
 }
 
 impl ModelBuilder {
+    /// The cavities filled with gas (default none), built on this
+    /// builder's mesh.
+    pub fn cavities(mut self, cavities: Vec<GasCavity>) -> Self {
+        self.cavities = cavities;
+        self
+    }
+
     /// Where curved elements measure their membrane strain (default
     /// [`MembraneIntegration::Auto`]: on their sub-triangles with bending,
     /// on their own interpolation without).
@@ -188,6 +199,7 @@ impl ModelBuilder {
             clamped,
             self_contact,
             membrane,
+            cavities,
         } = self;
         mesh.validate()?;
         let self_contact = match self_contact {
@@ -256,6 +268,7 @@ impl ModelBuilder {
             contact,
             bending,
             self_contact,
+            cavities,
         })
     }
 }
@@ -381,6 +394,40 @@ impl Model {
             clamped: Vec::new(),
             self_contact: None,
             membrane: MembraneIntegration::Auto,
+            cavities: Vec::new(),
+        }
+    }
+
+    /// The cavities filled with gas.
+    pub fn cavities(&self) -> &[GasCavity] {
+        &self.cavities
+    }
+
+    /// Where element `e`'s `n x n` blocks start in the Hessian's values
+    /// (row-major in `(a, b)`: see the field `element_blocks`).
+    pub(crate) fn element_bases(&self, e: usize) -> &[usize] {
+        let n2 = self.mesh.order.nodes_per_element().pow(2);
+        &self.element_blocks[n2 * e..n2 * (e + 1)]
+    }
+
+    /// Adds the `3n x 3n` matrix `k` (row-major) of element `e` to the
+    /// Hessian values `h` on [`Model::pattern`], on the calling thread.
+    pub(crate) fn add_element_matrix(&self, e: usize, k: &[f64], h: &mut [f64]) {
+        let el = self.mesh.element(e);
+        let n = el.len();
+        let m = 3 * n;
+        let bases = self.element_bases(e);
+        let (ptr, _) = self.pattern.node_graph();
+        for (b, &node_b) in el.iter().enumerate() {
+            let stride = 3 * (ptr[node_b + 1] - ptr[node_b]);
+            for a in 0..n {
+                let base = bases[a * n + b];
+                for j in 0..3 {
+                    for i in 0..3 {
+                        h[base + j * stride + i] += k[(3 * a + i) * m + 3 * b + j];
+                    }
+                }
+            }
         }
     }
 

@@ -1,6 +1,7 @@
 //! Checks a parsed [`Scenario`] and builds the model, schedule and monitors.
 
 use super::analysis::build_analysis;
+use super::cavity::build_cavities;
 use super::check::Checker;
 use super::contact::{build_contact, build_self_contact, check_initial_penetration};
 use super::material::{build_bending, build_material};
@@ -101,6 +102,25 @@ impl Scenario {
         }
         let contact = build_contact(&c, self, &base, &mut inputs)?;
         let self_contact = build_self_contact(&c, self)?;
+        let cavities = build_cavities(&c, &self.cavities, &mesh, &fixed, is_static)?;
+        if !cavities.is_empty() {
+            if matches!(self.contact, Some(super::ContactSpec::Lagrange(_))) {
+                return Err(c.invalid(
+                    "contact",
+                    None,
+                    "method",
+                    "= \"lagrange\" does not work with a [[cavity]]: the gas's rank-one tangent is not eliminated with the multipliers; use method = \"penalty\"".into(),
+                ));
+            }
+            if self.refine.is_some() {
+                return Err(c.invalid(
+                    "refine",
+                    None,
+                    "levels",
+                    "does not work with a [[cavity]] (a refined level does not carry the gas over yet)".into(),
+                ));
+            }
+        }
         let (mut analysis, mut adaptive, mut rest) = build_analysis(&c, self)?;
         if let Some(steps) = statics {
             (analysis, adaptive, rest) = (Analysis::Static { steps, from: 0.0 }, None, None);
@@ -127,6 +147,7 @@ impl Scenario {
             .bending(bending)
             .membrane(self.mesh.membrane)
             .self_contact(self_contact)
+            .cavities(cavities)
             .build()
             .map_err(|e| match e {
                 ModelError::SelfContact(e) => {
@@ -398,6 +419,7 @@ fn build_mesh(
     let mesh = match spec.shape {
         MeshShape::Rectangle => rectangle_mesh(c, spec, order, center)?,
         MeshShape::Disc => disc_mesh(c, spec, order, center)?,
+        MeshShape::Sphere => sphere_mesh(c, spec, order, center)?,
         MeshShape::File => file_mesh(c, spec, order, base, inputs)?,
     };
     // The generators are refused from their counts before they generate,
@@ -435,7 +457,7 @@ fn check_extent(c: &Checker, spec: &MeshSpec, mesh: &Mesh) -> Result<(), Scenari
                 spec.size.unwrap_or_default()
             ),
         ),
-        MeshShape::Disc => (
+        MeshShape::Disc | MeshShape::Sphere => (
             "radius",
             format!(
                 "{:e} puts nodes beyond {bound} (node {node} at {x:?})",
@@ -548,6 +570,7 @@ fn mesh_size_key(spec: &MeshSpec) -> &'static str {
     match spec.shape {
         MeshShape::Rectangle => "divisions",
         MeshShape::Disc => "rings",
+        MeshShape::Sphere => "subdivisions",
         MeshShape::File => "path",
     }
 }
@@ -595,7 +618,9 @@ fn rectangle_mesh(
         &[
             ("radius", spec.radius.is_some()),
             ("rings", spec.rings.is_some()),
+            ("subdivisions", spec.subdivisions.is_some()),
             ("path", spec.path.is_some()),
+            ("subdivisions", spec.subdivisions.is_some()),
         ],
         "to shape = \"rectangle\"",
     )?;
@@ -661,6 +686,7 @@ fn disc_mesh(
             ("divisions", spec.divisions.is_some()),
             ("pattern", spec.pattern.is_some()),
             ("path", spec.path.is_some()),
+            ("subdivisions", spec.subdivisions.is_some()),
         ],
         "to shape = \"disc\"",
     )?;
@@ -706,6 +732,65 @@ fn disc_mesh(
     ))
 }
 
+/// The most times a sphere's icosahedron may be subdivided: 81,920
+/// triangles, 40,962 nodes of order 1.
+const MAX_SUBDIVISIONS: usize = 6;
+
+/// `[mesh] shape = "sphere"`: a closed sphere (`generate::sphere`).
+fn sphere_mesh(
+    c: &Checker,
+    spec: &MeshSpec,
+    order: Option<ElementOrder>,
+    center: [f64; 3],
+) -> Result<Mesh, ScenarioError> {
+    let t = "mesh";
+    c.none_of(
+        t,
+        None,
+        &[
+            ("size", spec.size.is_some()),
+            ("divisions", spec.divisions.is_some()),
+            ("pattern", spec.pattern.is_some()),
+            ("path", spec.path.is_some()),
+            ("rings", spec.rings.is_some()),
+        ],
+        "to shape = \"sphere\"",
+    )?;
+    let radius = c.positive(
+        t,
+        None,
+        "radius",
+        c.required(
+            t,
+            None,
+            "radius",
+            &spec.radius,
+            "for shape = \"sphere\" (m)",
+        )?,
+    )?;
+    let subdivisions = c.required(
+        t,
+        None,
+        "subdivisions",
+        &spec.subdivisions,
+        "for shape = \"sphere\"",
+    )?;
+    if subdivisions > MAX_SUBDIVISIONS {
+        return Err(c.invalid(
+            t,
+            None,
+            "subdivisions",
+            format!("must lie in 0..={MAX_SUBDIVISIONS}, not {subdivisions}"),
+        ));
+    }
+    Ok(generate::sphere(
+        radius,
+        subdivisions,
+        center,
+        order.unwrap_or(ElementOrder::Linear),
+    ))
+}
+
 /// `[mesh] shape = "file"`: read and validated, its order the given one
 /// if any.
 fn file_mesh(
@@ -725,6 +810,7 @@ fn file_mesh(
             ("pattern", spec.pattern.is_some()),
             ("radius", spec.radius.is_some()),
             ("rings", spec.rings.is_some()),
+            ("subdivisions", spec.subdivisions.is_some()),
             ("center", spec.center.is_some()),
         ],
         "to shape = \"file\"",

@@ -20,6 +20,7 @@
 
 mod analysis;
 mod build;
+mod cavity;
 mod check;
 mod contact;
 mod lab;
@@ -30,6 +31,7 @@ mod specimen;
 mod tagged;
 
 pub use build::{absolute_paths, read_mesh_file};
+pub use cavity::{CavitySpec, GasLawSpec, InflatorSpec, VentSpec};
 pub use contact::{ContactMethodName, ContactSpec, LagrangeSpec, PenaltySpec};
 pub use lab::{FastSpec, KesSpec, LabValues, WarpWeft};
 pub use obstacle::{
@@ -132,13 +134,16 @@ pub struct Scenario {
     /// Refinement during the run (`[refine]`, none without it): the
     /// multilevel settle.
     pub refine: Option<RefineSpec>,
+    /// Gas in the volumes the fabric encloses (`[[cavity]]`), any number.
+    #[serde(default, rename = "cavity")]
+    pub cavities: Vec<CavitySpec>,
 }
 
 /// `[mesh]`: which mesh and of which order.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshSpec {
-    /// `"rectangle"`, `"disc"` or `"file"`. Required.
+    /// `"rectangle"`, `"disc"`, `"sphere"` or `"file"`. Required.
     pub shape: MeshShape,
     /// Rectangle: width (x) and height (y), m, > 0; every node within
     /// 1e6 m of the origin.
@@ -153,10 +158,13 @@ pub struct MeshSpec {
     /// Lagrange order of the triangles: 1 (default), 2 or 3. For a file, the
     /// file's order is used and this key, if given, must agree.
     pub order: Option<usize>,
-    /// Disc: radius, m, > 0; every node within 1e6 m of the origin.
+    /// Disc and sphere: radius, m, > 0; every node within 1e6 m of the origin.
     pub radius: Option<f64>,
     /// Disc: number of rings, >= 1.
     pub rings: Option<usize>,
+    /// Sphere: how many times the icosahedron's edges are halved, 0–6
+    /// (`20 4^s` triangles). A sphere is closed: a balloon's `[[cavity]]`.
+    pub subdivisions: Option<usize>,
     /// File: path of a Gmsh `.msh` (2.2 or 4.1, ASCII or binary) or `.obj`,
     /// relative to the scenario file's folder.
     pub path: Option<PathBuf>,
@@ -175,6 +183,8 @@ pub enum MeshShape {
     Rectangle,
     /// Structured disc.
     Disc,
+    /// Closed sphere (a subdivided icosahedron, nodes on the sphere).
+    Sphere,
     /// Read from a file.
     File,
 }

@@ -65,13 +65,14 @@ use crate::contact::ContactState;
 use crate::contact::lagrange::MAX_ACTIVE_SET_ROUNDS;
 use crate::input::{InputFile, fnv1a};
 use crate::integrator::State;
+use crate::load::gas::GasState;
 use crate::setup::{Analysis, Setup};
 use crate::simulation::schedule::REST_STEPS;
 use crate::solver::{KeptFactor, KeptLinear, KeptMultigrid, LinearStats};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"DRAPECKP";
-const VERSION: u32 = 8;
+const VERSION: u32 = 9;
 
 /// Longest key of an input file (bytes).
 const MAX_KEY_BYTES: usize = 256;
@@ -459,6 +460,19 @@ impl Checkpoint {
                 b.extend_from_slice(&(*a as u64).to_le_bytes());
             }
         }
+        b.extend_from_slice(&(s.gas.len() as u64).to_le_bytes());
+        for g in &s.gas {
+            for v in [
+                g.mass,
+                g.temperature,
+                g.volume,
+                g.pressure,
+                g.inflow,
+                g.outflow,
+            ] {
+                b.extend_from_slice(&v.to_le_bytes());
+            }
+        }
         let hash = fnv1a(&b);
         b.extend_from_slice(&hash.to_le_bytes());
         b
@@ -673,6 +687,27 @@ impl Checkpoint {
         } else {
             Vec::new()
         };
+        // (Version 9: the cavities' gas; none before.)
+        let gas = if version >= 9 {
+            let count = r.usize("cavity count")?;
+            if count > r.remaining() / 48 {
+                return Err(invalid(format!("cavity count {count} beyond the file")));
+            }
+            (0..count)
+                .map(|_| {
+                    Ok(GasState {
+                        mass: r.f64("gas mass")?,
+                        temperature: r.f64("gas temperature")?,
+                        volume: r.f64("cavity volume")?,
+                        pressure: r.f64("gas pressure")?,
+                        inflow: r.f64("gas inflow")?,
+                        outflow: r.f64("gas outflow")?,
+                    })
+                })
+                .collect::<Result<Vec<_>, CheckpointError>>()?
+        } else {
+            Vec::new()
+        };
         if r.remaining() != 0 {
             return Err(invalid(format!("{} trailing bytes", r.remaining())));
         }
@@ -689,6 +724,7 @@ impl Checkpoint {
                 external_work,
                 friction_dissipation,
                 contact,
+                gas,
             },
             external_forces,
             frames,
@@ -705,6 +741,27 @@ impl Checkpoint {
     fn check_values(&self) -> Result<(), CheckpointError> {
         let c = &self.counters;
         let s = &self.state;
+        for (k, g) in s.gas.iter().enumerate() {
+            let sound = [
+                g.mass,
+                g.temperature,
+                g.volume,
+                g.pressure,
+                g.inflow,
+                g.outflow,
+            ]
+            .iter()
+            .all(|v| v.is_finite() && *v >= 0.0)
+                && g.temperature > 0.0
+                && g.volume > 0.0;
+            refuse(
+                sound,
+                format!(
+                    "cavity {k}'s gas (mass {}, temperature {}, volume {}, pressure {}, inflow {}, outflow {}) is not a gas: every value finite and >= 0, temperature and volume > 0",
+                    g.mass, g.temperature, g.volume, g.pressure, g.inflow, g.outflow
+                ),
+            )?;
+        }
         refuse(
             c.step_size.is_finite() && c.step_size >= 0.0,
             format!("step size {} is not a finite size >= 0", c.step_size),
@@ -821,6 +878,14 @@ impl Checkpoint {
     /// The counters against the scenario's schedule: the position in it,
     /// the converged steps and Newton iterations it allows, the time.
     fn fits(&self, setup: &Setup) -> Result<(), CheckpointError> {
+        let cavities = setup.model.cavities().len();
+        refuse(
+            self.state.gas.len() == cavities,
+            format!(
+                "{} cavities' gas, the scenario has {cavities} cavities",
+                self.state.gas.len()
+            ),
+        )?;
         let c = &self.counters;
         let time = self.state.time;
         let segments = setup.analysis.schedule();
@@ -1291,6 +1356,14 @@ mod tests {
                     active: vec![Some((0, 2)), None],
                     multipliers: vec![0.5, 0.0],
                 }),
+                gas: vec![GasState {
+                    mass: 1.2e-3,
+                    temperature: 310.0,
+                    volume: 1.1e-3,
+                    pressure: 1.1e5,
+                    inflow: 2e-4,
+                    outflow: 1e-4,
+                }],
             },
             external_forces: v(4.0),
             frames: vec![(0.0, 0), (0.2, 7)],
@@ -1333,6 +1406,11 @@ mod tests {
     /// checksum.
     fn layout_len(c: &Checkpoint) -> usize {
         8 + 32 * c.self_contact_layout.len()
+    }
+
+    /// The bytes of `c`'s gas (version 9): a count, six values a cavity.
+    fn gas_len(c: &Checkpoint) -> usize {
+        8 + 48 * c.state.gas.len()
     }
 
     /// The bytes of `c`'s levels and pending sub-steps (version 8), after
@@ -1408,6 +1486,11 @@ mod tests {
     /// persistence too).
     fn as_version(c: &Checkpoint, version: u32) -> Vec<u8> {
         let bytes = c.to_bytes();
+        // Version 8: without the cavities' gas, last before the checksum.
+        let bytes = seal(bytes[..bytes.len() - 8 - gas_len(c)].to_vec(), 8);
+        if version == 8 {
+            return bytes;
+        }
         // Version 7: without the levels, after the input files.
         let mut at = 8 + 4 + 8 + 8;
         for _ in c.inputs.iter().flatten() {
@@ -1477,7 +1560,7 @@ mod tests {
         seal(old, version)
     }
 
-    /// Version 6 resumes with no self-contact layout; version 5 with
+    /// Version 8 resumes without gas (no cavities then); version 6 with no self-contact layout; version 5 with
     /// nothing kept by the linear solver; version 4
     /// with no friction dissipated; version 3 without
     /// input files (unchecked); versions 1 and 2
@@ -1488,6 +1571,10 @@ mod tests {
     fn reads_versions_1_to_6_with_defaults_for_the_new_fields() {
         let c = sample(true);
         let mut expected = c.clone();
+        // Version 8: no gas.
+        expected.state.gas = Vec::new();
+        let v8 = Checkpoint::from_bytes(&as_version(&c, 8), 6, 2, 0xdead_beef).unwrap();
+        assert_eq!(v8, expected);
         // Version 7: no levels, no pending sub-steps.
         expected.levels = Levels::default();
         expected.pending = Vec::new();
@@ -1631,11 +1718,11 @@ mod tests {
         // A later version is refused by name.
         let mut later = sample(true).to_bytes();
         later.truncate(later.len() - 8);
-        let later = seal(later, 9);
+        let later = seal(later, 10);
         let e = Checkpoint::from_bytes(&later, 6, 2, 0xdead_beef).unwrap_err();
         assert!(
             e.to_string()
-                .contains("version 9, this drape reads versions 1 to 8"),
+                .contains("version 10, this drape reads versions 1 to 9"),
             "{e}"
         );
     }
@@ -1671,7 +1758,16 @@ mod tests {
         // multigrid flag, its matrix's length and values, its 3 counters;
         // the factor's flag, length and values.
         // The self-contact layout, last: a node beyond the mesh's two.
-        let layout_at = bytes.len() - 8 - layout_len(&c);
+        let gas_at = bytes.len() - 8 - gas_len(&c);
+        says(
+            &forge(gas_at, &u64::MAX.to_le_bytes()),
+            "cavity count 18446744073709551615 beyond the file",
+        );
+        says(
+            &forge(gas_at + 8, &(-1.0f64).to_le_bytes()),
+            "cavity 0's gas (mass -1",
+        );
+        let layout_at = gas_at - layout_len(&c);
         says(
             &forge(layout_at + 8 + 8, &7u64.to_le_bytes()),
             "layout stencil node 7 beyond the mesh's 2 nodes",

@@ -286,8 +286,25 @@ pub fn history_columns(setup: &Setup) -> Vec<String> {
         ]
         .map(String::from),
     );
+    for i in 0..setup.model.cavities().len() {
+        for c in CAVITY_COLUMNS {
+            columns.push(format!("cavity{i}_{c}"));
+        }
+    }
     columns
 }
+
+/// Each cavity's columns (`cavity<i>_...`, SPEC §6.7; `inflow` and
+/// `outflow`: the gas mass the inflator has delivered and the vents have
+/// let out since the start, kg).
+pub const CAVITY_COLUMNS: [&str; 6] = [
+    "volume",
+    "pressure",
+    "mass",
+    "temperature",
+    "inflow",
+    "outflow",
+];
 
 impl History<'_> {
     /// Appends and flushes the row of `state` after `r`; returns the
@@ -334,6 +351,16 @@ impl History<'_> {
             state.friction_dissipation,
             model.mesh().element_count() as f64,
         ]);
+        for g in &state.gas {
+            row.extend_from_slice(&[
+                g.volume,
+                g.pressure,
+                g.mass,
+                g.temperature,
+                g.inflow,
+                g.outflow,
+            ]);
+        }
         let path = self.writer.path().to_path_buf();
         self.writer.write_row(&row).map_err(io_err(&path))?;
         self.last.set(self.setup, state, kinetic, strain);

@@ -93,6 +93,27 @@ pub struct Summary {
     /// the coarse one first; absent without `[refine]`.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub levels: Vec<LevelRecord>,
+    /// Each `[[cavity]]`'s gas at the last state (the history's last
+    /// `cavity<i>_...` values); absent without cavities.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub cavities: Vec<CavityRecord>,
+}
+
+/// A cavity's gas as `summary.json`'s `cavities` lists it.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct CavityRecord {
+    /// Volume (m^3).
+    pub volume: f64,
+    /// Absolute pressure (Pa).
+    pub pressure: f64,
+    /// Gas mass (kg).
+    pub mass: f64,
+    /// Temperature (K).
+    pub temperature: f64,
+    /// Mass delivered by the inflator since the start (kg).
+    pub inflow: f64,
+    /// Mass let out by the vents since the start (kg).
+    pub outflow: f64,
 }
 
 /// One level of a multilevel settle, as `summary.json`'s `levels` lists
@@ -137,6 +158,8 @@ pub(super) struct Figures {
     pub(super) external_work: f64,
     /// Each monitor's position, in the scenario's order.
     pub(super) monitors: Vec<[f64; 3]>,
+    /// Each cavity's gas.
+    pub(super) cavities: Vec<CavityRecord>,
 }
 
 impl Figures {
@@ -151,6 +174,15 @@ impl Figures {
         self.monitors.extend(setup.monitors.iter().map(|m| {
             let p = &state.positions[3 * m.node..3 * m.node + 3];
             [p[0], p[1], p[2]]
+        }));
+        self.cavities.clear();
+        self.cavities.extend(state.gas.iter().map(|g| CavityRecord {
+            volume: g.volume,
+            pressure: g.pressure,
+            mass: g.mass,
+            temperature: g.temperature,
+            inflow: g.inflow,
+            outflow: g.outflow,
         }));
     }
 
@@ -288,6 +320,7 @@ pub(super) fn summary(
         linear: Default::default(),
         warnings: warnings(setup),
         levels: Vec::new(),
+        cavities: figures.cavities.clone(),
     }
 }
 

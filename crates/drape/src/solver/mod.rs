@@ -16,6 +16,7 @@ mod faer_failure;
 mod krylov;
 pub mod linear;
 mod linear_error;
+pub mod low_rank;
 pub mod newton;
 pub mod pattern;
 mod precondition;

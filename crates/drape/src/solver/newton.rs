@@ -55,6 +55,7 @@
 //! cutting the step.
 
 use super::linear::{Factorization, LinearSolveError, LinearSolver};
+use super::low_rank::{LowRank, Woodbury};
 use crate::vecn::{dot, norm};
 
 /// Convergence settings.
@@ -290,6 +291,13 @@ pub trait NewtonSystem {
     fn max_step(&self, _y: &[f64], _dy: &[f64]) -> f64 {
         1.0
     }
+
+    /// The symmetric low-rank part of the Hessian last evaluated, which
+    /// `H` leaves out (`H + U C U^T` is the tangent): every solve adds it
+    /// by Woodbury's identity ([`super::low_rank`]). Default: none.
+    fn low_rank(&self) -> Option<&LowRank> {
+        None
+    }
 }
 
 /// Buffers reused across Newton iterations and steps.
@@ -307,6 +315,8 @@ pub struct NewtonWorkspace {
     unshifted: Vec<f64>,
     /// The projected Newton's state in the current solve.
     ppn: Progressive,
+    /// The system's low-rank part for the last factorisation.
+    woodbury: Woodbury,
     /// Set from outside (a signal, through the run's stop flag) to end a
     /// solve at its next iteration or line-search trial with
     /// [`NewtonError::Interrupted`] (issue 46: a step that never ends
@@ -368,6 +378,7 @@ impl NewtonWorkspace {
             diagonal: Vec::new(),
             unshifted: Vec::new(),
             ppn: Progressive::default(),
+            woodbury: Woodbury::default(),
             interrupt: None,
         }
     }
@@ -529,6 +540,8 @@ fn projected_direction(
             *d = -g;
         }
         if let Some(used) = ws.linear.solve_spd(&ws.h, &mut ws.dy)? {
+            ws.woodbury
+                .prepare(system.low_rank(), &mut ws.linear, &ws.h, true, &mut ws.dy)?;
             system.transform_increment(&mut ws.dy);
             let slope = dot(&ws.g, &ws.dy);
             if slope < 0.0 {
@@ -737,6 +750,13 @@ fn solve_for_increment(
         *d = -g;
     }
     report.factorization = Some(ws.linear.solve(&ws.h, symmetric, &mut ws.dy)?);
+    ws.woodbury.prepare(
+        system.low_rank(),
+        &mut ws.linear,
+        &ws.h,
+        symmetric,
+        &mut ws.dy,
+    )?;
     system.transform_increment(&mut ws.dy);
     Ok(())
 }
@@ -944,6 +964,7 @@ fn chord_steps(
         if !ws.linear.solve_again(&ws.h, &mut ws.dy) {
             return moved;
         }
+        ws.woodbury.correct(&mut ws.dy);
         system.transform_increment(&mut ws.dy);
         let step = increment_of(settings, &ws.dy, length);
         // A chord step the system would cut short is left to a Newton

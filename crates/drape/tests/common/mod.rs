@@ -199,3 +199,56 @@ pub fn sheared_equilibrium(s: &mut Setup, gamma: f64) -> (Vec<f64>, f64) {
         .fold(0.0, f64::max);
     (state.positions, off)
 }
+
+/// `(time, position)` of one node after every step.
+pub type Track = Vec<(f64, [f64; 3])>;
+
+/// Steps scenario `text` (its scheme, Newton's settings) to `end` (s) from 1 ms steps, halving a step that
+/// fails and growing it back after one that converges, and returns the
+/// crossings after every step, the final positions, the steps taken, how
+/// many times the Hessian's layout was built, and the track of `node`.
+pub fn drive_through(
+    text: &str,
+    end: f64,
+    node: Option<usize>,
+) -> (Vec<usize>, Vec<f64>, usize, usize, Track) {
+    use drape::integrator::newmark::DynamicWorkspace;
+    let s = setup(text);
+    let drape::setup::Analysis::Dynamic { newmark, .. } = &s.analysis else {
+        panic!("dynamic")
+    };
+    // Curved elements by their linear sub-triangles, as self-contact
+    // measures them.
+    let (triangles, _) = drape::bending::triangulate(s.model.mesh());
+    let edges = drape::contact::proximity::edges_of(&triangles);
+    let mut ws = DynamicWorkspace::new(&s.model).unwrap();
+    let mut state = newmark.initial_state(&s.model, &mut ws).unwrap();
+    let length = drape::simulation::reference_length(&s.model.initial_positions());
+    let (mut dt, mut seen, mut steps) = (1e-3f64, Vec::new(), 0);
+    let mut track = Vec::new();
+    while state.time < end - 1e-12 {
+        let saved = state.clone();
+        let h = dt.min(end - state.time);
+        match newmark.step(&s.model, &mut state, h, &s.newton, length, &mut ws) {
+            Ok(_) => {
+                let x: Vec<[f64; 3]> = state
+                    .positions
+                    .chunks(3)
+                    .map(|c| [c[0], c[1], c[2]])
+                    .collect();
+                seen.push(drape::contact::proximity::crossings(&x, &triangles, &edges));
+                if let Some(a) = node {
+                    track.push((state.time, x[a]));
+                }
+                steps += 1;
+                dt = (2.0 * dt).min(1e-3);
+            }
+            Err(e) => {
+                state = saved;
+                dt *= 0.5;
+                assert!(dt > 1e-7, "step from t = {} failed: {e}", state.time);
+            }
+        }
+    }
+    (seen, state.positions, steps, ws.layout_builds(), track)
+}

@@ -6,6 +6,7 @@
 
 mod bending;
 mod friction;
+mod gas;
 mod inertia;
 mod loads;
 mod membrane;
@@ -15,6 +16,7 @@ mod self_friction;
 
 pub use bending::BendingTerm;
 pub use friction::FrictionTerm;
+pub use gas::GasTerm;
 pub use inertia::InertiaTerm;
 pub use loads::LoadTerm;
 pub use membrane::MembraneTerm;
@@ -24,8 +26,8 @@ pub use self_friction::SelfFrictionTerm;
 
 #[cfg(test)]
 pub(crate) use check::{
-    check_projection, check_term, contact_patch, deformed, patch_builder, patch_model,
-    relative_smallest_eigenvalue,
+    check_projection, check_term, contact_patch, deformed, dense_hessian, patch_builder,
+    patch_model, relative_smallest_eigenvalue,
 };
 
 #[cfg(test)]
@@ -105,7 +107,7 @@ mod check {
 
     /// The dense Hessian of `term` at `y` (columns of the sparse pattern
     /// expanded), row-major.
-    fn dense_hessian(
+    pub(crate) fn dense_hessian(
         term: &mut dyn StepTerm,
         ctx: &StepContext,
         pattern: &SparsePattern,
