@@ -215,7 +215,8 @@ fn hencky_reached_by_gas_rises_as_under_the_same_pressure() {
 /// bag is its initial mass plus the inflow less the outflow to 1e-9
 /// relative, the inflow is the table's integral to the time, the vent
 /// lets gas out once the pressure rises, and the pressure never falls
-/// below ambient.
+/// below ambient; the gas's energy balance (its internal energy against
+/// the enthalpy in and out and its work on the fabric) holds to 1e-9.
 #[test]
 fn inflator_and_vent_balance_the_gas_mass() {
     let table: [[f64; 2]; 4] = [[0.0, 0.0], [0.02, 0.05], [0.06, 0.05], [0.08, 0.0]];
@@ -286,6 +287,36 @@ every = 1000
     assert!(
         m[last] > m[0],
         "the bag holds more gas than it started with"
+    );
+    // The gas's first law, step by step (Wang & Nefske; docs/theory.md
+    // §1.16): its internal energy `m c_v T` changes by the inflator's
+    // enthalpy in, the vent's enthalpy out (at the step's starting
+    // temperature) and the work it does on the fabric — the gas's part of
+    // `external_work`, net of ambient, plus the ambient's `p_amb dV`.
+    let (cv, cp, t_in) = (743.0, 1040.0, 600.0);
+    let temperature = column(&header, &rows, "cavity0_temperature");
+    let volume = column(&header, &rows, "cavity0_volume");
+    let work = column(&header, &rows, "external_work");
+    let u = |k: usize| m[k] * cv * temperature[k];
+    let mut enthalpy = 0.0;
+    let mut largest: f64 = 0.0;
+    for k in 1..rows.len() {
+        enthalpy += (inflow[k] - inflow[k - 1]) * cp * t_in
+            - (outflow[k] - outflow[k - 1]) * cp * temperature[k - 1];
+        let done = work[k] + AMBIENT * (volume[k] - volume[0]);
+        let gap = (u(k) - u(0)) - (enthalpy - done);
+        largest = largest.max(gap.abs() / u(k));
+        assert!(
+            gap.abs() <= 1e-9 * u(k),
+            "step {k}: the gas's energy changed by {} J, the balance says {} J",
+            u(k) - u(0),
+            enthalpy - done
+        );
+    }
+    eprintln!(
+        "first law: largest gap {largest:.1e} of the internal energy ({:.1} J in, the work {:.3} J)",
+        enthalpy,
+        work[last] + AMBIENT * (volume[last] - volume[0])
     );
 }
 
