@@ -49,3 +49,20 @@ pub const ALL: &[(&str, &str)] = &[
         include_str!("../../../examples/folded-bag.toml"),
     ),
 ];
+
+/// The files an example reads beside it, `(example, path as its scenario
+/// names it, contents)`: `drape example NAME --write FILE` writes them
+/// beside FILE, so that the written scenario runs as it is.
+pub const FILES: &[(&str, &str, &[u8])] = &[(
+    "folded-bag",
+    "meshes/folded-bag.obj",
+    include_bytes!("../../../examples/meshes/folded-bag.obj"),
+)];
+
+/// The files `name` reads beside it ([`FILES`]).
+pub fn files_of(name: &str) -> impl Iterator<Item = (&'static str, &'static [u8])> + '_ {
+    FILES
+        .iter()
+        .filter(move |(n, _, _)| *n == name)
+        .map(|(_, path, bytes)| (*path, *bytes))
+}

@@ -808,6 +808,11 @@ fn example(name: Option<&str>, write: Option<&Path>, force: bool) -> Result<(), 
         })?;
     let Some(path) = write else {
         print!("{text}");
+        for (file, _) in examples::files_of(name) {
+            eprintln!(
+                "note: example {name:?} reads {file} beside it; `drape example {name} --write FILE` writes both"
+            );
+        }
         return Ok(());
     };
     // A bad target is the user's input (exit 2): a directory, or a file
@@ -842,5 +847,31 @@ fn example(name: Option<&str>, write: Option<&Path>, force: bool) -> Result<(), 
     use std::io::Write;
     file.write_all(text.as_bytes())
         .with_context(|| format!("cannot write {}", path.display()))
-        .map_err(Failure::Run)
+        .map_err(Failure::Run)?;
+    // The files it reads, beside it (an identical one already there is
+    // left as it is; another is replaced only with --force).
+    let dir = path.parent().unwrap_or(Path::new("."));
+    for (file, bytes) in examples::files_of(name) {
+        let target = dir.join(file);
+        if let Ok(existing) = std::fs::read(&target) {
+            if existing == bytes {
+                continue;
+            }
+            if !force {
+                return Err(Failure::Input(anyhow::anyhow!(
+                    "cannot write {}, which example {name:?} reads: the file exists and differs (add --force to replace it)",
+                    target.display()
+                )));
+            }
+        }
+        if let Some(parent) = target.parent() {
+            std::fs::create_dir_all(parent)
+                .with_context(|| format!("cannot make {}", parent.display()))
+                .map_err(Failure::Run)?;
+        }
+        std::fs::write(&target, bytes)
+            .with_context(|| format!("cannot write {}", target.display()))
+            .map_err(Failure::Run)?;
+    }
+    Ok(())
 }

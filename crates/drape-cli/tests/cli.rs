@@ -706,6 +706,10 @@ fn example_lists_prints_and_writes_the_bundled_examples() {
         let what = format!("drape example {name} --write");
         assert_eq!(o.status.code(), Some(0), "{}", describe(&what, &o));
         assert_eq!(std::fs::read_to_string(&target).unwrap(), text, "{what}");
+        // What it wrote runs as it is: the files it reads are beside it.
+        let o = drape(tmp.path(), &["check".as_ref(), target.as_os_str()]);
+        let what = format!("drape check of {name} as --write wrote it");
+        assert_eq!(o.status.code(), Some(0), "{}", describe(&what, &o));
     }
     // hanging-cloth is named in the README.
     let o = drape_s(tmp.path(), &["example", "hanging-cloth"]);
