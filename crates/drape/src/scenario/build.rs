@@ -620,7 +620,6 @@ fn rectangle_mesh(
             ("rings", spec.rings.is_some()),
             ("subdivisions", spec.subdivisions.is_some()),
             ("path", spec.path.is_some()),
-            ("subdivisions", spec.subdivisions.is_some()),
         ],
         "to shape = \"rectangle\"",
     )?;

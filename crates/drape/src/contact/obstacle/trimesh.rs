@@ -717,69 +717,17 @@ mod tests {
         }
     }
 
-    /// An icosahedron subdivided `levels` times, projected onto the sphere.
+    /// An icosahedron subdivided `levels` times, projected onto the sphere
+    /// (the mesh generator's sphere, as a soup).
     fn icosphere(levels: usize, centre: [f64; 3], radius: f64) -> Soup {
-        let g = (1.0 + 5f64.sqrt()) / 2.0;
-        let mut v: Vec<[f64; 3]> = vec![
-            [-1.0, g, 0.0],
-            [1.0, g, 0.0],
-            [-1.0, -g, 0.0],
-            [1.0, -g, 0.0],
-            [0.0, -1.0, g],
-            [0.0, 1.0, g],
-            [0.0, -1.0, -g],
-            [0.0, 1.0, -g],
-            [g, 0.0, -1.0],
-            [g, 0.0, 1.0],
-            [-g, 0.0, -1.0],
-            [-g, 0.0, 1.0],
-        ];
-        let mut t: Vec<[usize; 3]> = vec![
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
-        for p in &mut v {
-            *p = scale(*p, 1.0 / norm(*p));
-        }
-        for _ in 0..levels {
-            let mut middle: HashMap<(usize, usize), usize> = HashMap::new();
-            let mut next = Vec::new();
-            for [a, b, c] in t {
-                let mut mid = |i: usize, j: usize| {
-                    *middle.entry((i.min(j), i.max(j))).or_insert_with(|| {
-                        let m = add(v[i], v[j]);
-                        v.push(scale(m, 1.0 / norm(m)));
-                        v.len() - 1
-                    })
-                };
-                let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
-                next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-            }
-            t = next;
-        }
-        let v = v
-            .into_iter()
-            .map(|p| add(centre, scale(p, radius)))
-            .collect();
-        (v, t)
+        let mesh = crate::mesh::generate::sphere(
+            radius,
+            levels,
+            centre,
+            crate::mesh::ElementOrder::Linear,
+        );
+        let t = mesh.elements().map(|e| [e[0], e[1], e[2]]).collect();
+        (mesh.nodes, t)
     }
 
     /// The prism over a polygon (counter-clockwise seen from +z, star-shaped
