@@ -503,8 +503,6 @@ steps = 1
 /// mass, temperature, volume, pressure and the flows since the start.
 #[test]
 fn an_inflating_bag_resumes_bit_for_bit() {
-    use drape::simulation::{RunControl, RunError, StepInfo};
-    use std::sync::atomic::{AtomicBool, Ordering};
     let text = r#"
 [mesh]
 shape = "sphere"
@@ -532,44 +530,10 @@ every = 10
     let dir = temp_dir("bag-resume");
     let path = dir.join("bag.toml");
     std::fs::write(&path, text).unwrap();
-    let setup = || {
-        let (scenario, source) = drape::scenario::Scenario::read(&path).unwrap();
-        scenario.build(&path, &source).unwrap()
-    };
-    let whole = dir.join("whole");
-    run(&setup(), &whole, &mut |_| {}).unwrap();
-    let out = dir.join("out");
-    let stop = AtomicBool::new(false);
-    let mut observer = |info: &StepInfo| {
-        if info.step == 17 {
-            stop.store(true, Ordering::SeqCst);
-        }
-    };
-    let control = RunControl {
-        stop: Some(&stop),
-        resume: false,
-        ..Default::default()
-    };
-    let stopped = drape::simulation::run_with(&setup(), &out, &mut observer, control);
-    assert!(
-        matches!(stopped, Err(RunError::Interrupted { .. })),
-        "{stopped:?}"
-    );
-    let ck = drape::simulation::Checkpoint::read(
-        &std::fs::read(drape::simulation::checkpoint_path(&out)).unwrap(),
-        &setup(),
-    )
-    .unwrap();
-    assert_eq!(ck.state.gas.len(), 1);
-    assert!(ck.state.gas[0].inflow > 0.0, "{:?}", ck.state.gas[0]);
-    let control = RunControl {
-        stop: None,
-        resume: true,
-        ..Default::default()
-    };
-    drape::simulation::run_with(&setup(), &out, &mut |_| {}, control).unwrap();
-    let read = |d: &Path| std::fs::read(d.join("history.csv")).unwrap();
-    assert_eq!(read(&whole), read(&out));
+    common::stops_and_resumes_bit_for_bit(&path, &dir, 17, |ck| {
+        assert_eq!(ck.state.gas.len(), 1);
+        assert!(ck.state.gas[0].inflow > 0.0, "{:?}", ck.state.gas[0]);
+    });
 }
 
 /// Two square plies of 20 cm joined at their rim, lying flat on each

@@ -408,8 +408,6 @@ fn a_conservative_newmark_with_self_contact_is_warned_about() {
 /// from, and each step forgets the broad phase kept by the one before.
 #[test]
 fn a_self_contact_run_resumes_bit_for_bit() {
-    use drape::simulation::{RunControl, RunError, StepInfo};
-    use std::sync::atomic::{AtomicBool, Ordering};
     let text = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/folding-cloth.toml"),
     )
@@ -419,46 +417,12 @@ fn a_self_contact_run_resumes_bit_for_bit() {
     let dir = common::temp_dir("self-resume");
     let path = dir.join("s.toml");
     std::fs::write(&path, &text).unwrap();
-    let setup = || {
-        let (scenario, source) = drape::scenario::Scenario::read(&path).unwrap();
-        scenario.build(&path, &source).unwrap()
-    };
-    let whole = dir.join("whole");
-    drape::simulation::run(&setup(), &whole, &mut |_| {}).unwrap();
-    let out = dir.join("out");
-    let stop = AtomicBool::new(false);
-    let mut observer = |info: &StepInfo| {
-        if info.step == 120 {
-            stop.store(true, Ordering::SeqCst);
-        }
-    };
-    let control = RunControl {
-        stop: Some(&stop),
-        resume: false,
-        ..Default::default()
-    };
-    let stopped = drape::simulation::run_with(&setup(), &out, &mut observer, control);
-    assert!(
-        matches!(stopped, Err(RunError::Interrupted { .. })),
-        "{stopped:?}"
-    );
-    let ck = drape::simulation::Checkpoint::read(
-        &std::fs::read(drape::simulation::checkpoint_path(&out)).unwrap(),
-        &setup(),
-    )
-    .unwrap();
-    assert!(
-        !ck.self_contact_layout.is_empty(),
-        "no layout kept at step 120"
-    );
-    let control = RunControl {
-        stop: None,
-        resume: true,
-        ..Default::default()
-    };
-    drape::simulation::run_with(&setup(), &out, &mut |_| {}, control).unwrap();
-    let read = |d: &Path| std::fs::read(d.join("history.csv")).unwrap();
-    assert_eq!(read(&whole), read(&out));
+    common::stops_and_resumes_bit_for_bit(&path, &dir, 120, |ck| {
+        assert!(
+            !ck.self_contact_layout.is_empty(),
+            "no layout kept at step 120"
+        );
+    });
 }
 
 /// The `[material]` table of every scenario here: 192 g/m² (320 kg/m³,

@@ -252,3 +252,54 @@ pub fn drive_through(
     }
     (seen, state.positions, steps, ws.layout_builds(), track)
 }
+
+/// Runs the scenario file `path` whole into `dir/whole`, and again into
+/// `dir/out` stopped after step `stop_at` (an interrupted run with its
+/// checkpoint); `check` sees that checkpoint; then resumes `dir/out` to the
+/// end and asserts that both histories are byte for byte the same.
+pub fn stops_and_resumes_bit_for_bit(
+    path: &Path,
+    dir: &Path,
+    stop_at: usize,
+    check: impl FnOnce(&drape::simulation::Checkpoint),
+) {
+    use drape::simulation::{RunControl, RunError, StepInfo};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let setup = || {
+        let (scenario, source) = Scenario::read(path).unwrap();
+        scenario.build(path, &source).unwrap()
+    };
+    let whole = dir.join("whole");
+    drape::simulation::run(&setup(), &whole, &mut |_| {}).unwrap();
+    let out = dir.join("out");
+    let stop = AtomicBool::new(false);
+    let mut observer = |info: &StepInfo| {
+        if info.step == stop_at {
+            stop.store(true, Ordering::SeqCst);
+        }
+    };
+    let control = RunControl {
+        stop: Some(&stop),
+        resume: false,
+        ..Default::default()
+    };
+    let stopped = drape::simulation::run_with(&setup(), &out, &mut observer, control);
+    assert!(
+        matches!(stopped, Err(RunError::Interrupted { .. })),
+        "{stopped:?}"
+    );
+    let ck = drape::simulation::Checkpoint::read(
+        &std::fs::read(drape::simulation::checkpoint_path(&out)).unwrap(),
+        &setup(),
+    )
+    .unwrap();
+    check(&ck);
+    let control = RunControl {
+        stop: None,
+        resume: true,
+        ..Default::default()
+    };
+    drape::simulation::run_with(&setup(), &out, &mut |_| {}, control).unwrap();
+    let read = |d: &Path| std::fs::read(d.join("history.csv")).unwrap();
+    assert_eq!(read(&whole), read(&out));
+}
