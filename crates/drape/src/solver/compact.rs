@@ -26,7 +26,7 @@
 use super::block_lu::BlockLu;
 use super::direct::{Cholesky, Scratch};
 use super::linear_error::SolveFailure;
-use super::pattern::SparsePattern;
+use super::pattern::{SparsePattern, block_layout as layout};
 use faer::sparse::SymbolicSparseColMat;
 use faer::{Mat, Par};
 
@@ -64,18 +64,6 @@ pub(super) struct Compact {
     far: Vec<[usize; 6]>,
     values: Vec<f64>,
     factor: Factor,
-    /// Whether `factor` holds a factor of the current values.
-    pub(super) factored: bool,
-    /// Factorisations made.
-    pub(super) factorizations: usize,
-}
-
-/// `(base, stride)` of the block at node-graph position `p` of column `b`
-/// in the values of a node-block pattern with node pointers `ptr`
-/// (the layout of [`SparsePattern::block_layout`]).
-fn layout(ptr: &[usize], p: usize, b: usize) -> (usize, usize) {
-    let start = ptr[b];
-    (9 * start + 3 * (p - start), 3 * (ptr[b + 1] - start))
 }
 
 impl Compact {
@@ -108,8 +96,6 @@ impl Compact {
             far,
             values,
             factor: Factor::None,
-            factored: false,
-            factorizations: 0,
         }
     }
 
@@ -159,8 +145,6 @@ impl Compact {
     /// not positive definite (nor then is `A`).
     pub(super) fn factorize(&mut self, full: &[f64]) -> Result<bool, SolveFailure> {
         self.gather(full);
-        self.factorizations += 1;
-        self.factored = false;
         if matches!(self.factor, Factor::None) {
             let n = self.compact.dimension();
             self.factor = if n <= BLOCK_LU_MAX {
@@ -186,7 +170,7 @@ impl Compact {
                 }))
             };
         }
-        self.factored = match &mut self.factor {
+        let factored = match &mut self.factor {
             Factor::None => false,
             Factor::BlockLu(lu) => lu.factorize(&self.values, true).is_ok() && lu.pivots_positive(),
             Factor::Cholesky(c) => {
@@ -194,7 +178,7 @@ impl Compact {
                     .factorize(c.pattern.as_ref(), &self.values, Par::Seq, &mut c.scratch)
             }
         };
-        Ok(self.factored)
+        Ok(factored)
     }
 
     /// `z = M^-1 r` with the last factor.

@@ -17,6 +17,14 @@
 
 use crate::block3::Block;
 
+/// [`SparsePattern::block_layout`] for a node graph's pointers `ptr`
+/// alone (the layout of the module docs).
+#[inline]
+pub(crate) fn block_layout(ptr: &[usize], p: usize, b: usize) -> (usize, usize) {
+    let start = ptr[b];
+    (9 * start + 3 * (p - start), 3 * (ptr[b + 1] - start))
+}
+
 /// CSC pattern of the DOF-level Hessian plus the node graph behind it.
 #[derive(Debug, Clone)]
 pub struct SparsePattern {
@@ -174,9 +182,7 @@ impl SparsePattern {
     /// i` (the layout of [`SparsePattern::entry`], computed once per block).
     #[inline]
     pub fn block_layout(&self, p: usize, b: usize) -> (usize, usize) {
-        let start = self.node_ptr[b];
-        let degree = self.node_ptr[b + 1] - start;
-        (9 * start + 3 * (p - start), 3 * degree)
+        block_layout(&self.node_ptr, p, b)
     }
 
     /// Node-graph CSC: `(ptr, rows)`.
