@@ -7,12 +7,14 @@
 //! refused resume recorded in its words: `resume=False`), and runs with
 //! the GIL released. Ctrl-C
 //! reaches a Rust loop only through Python: the interpreter's own handler
-//! records the signal, and the run's observer asks for it
-//! (`PyErr_CheckSignals`, every [`SIGNAL_INTERVAL`] at most, between
-//! steps); a pending `KeyboardInterrupt` sets the stop flag the command
-//! line's handler sets, so the run ends as it does there — the step
-//! finished, a checkpoint, the summary (`"interrupted"`) — and then the
-//! `KeyboardInterrupt` is raised.
+//! records the signal, and only its main thread is told. So the run goes
+//! on a thread of its own while the calling thread waits for it with the
+//! GIL released and asks for signals (`PyErr_CheckSignals`) every
+//! [`SIGNAL_INTERVAL`], wherever the run is — inside a step too; a pending
+//! `KeyboardInterrupt` sets the stop flag the command line's handler sets,
+//! so the run ends as it does there — inside a step, its Newton solve
+//! interrupted at its next iteration; a checkpoint; the summary
+//! (`"interrupted"`) — and then the `KeyboardInterrupt` is raised.
 
 use crate::errors::{output_error, run_error, scenario_error};
 use crate::input::Source;
@@ -24,7 +26,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// How often a run asks Python whether a signal came: attaching to the
 /// interpreter costs about a microsecond when no other thread holds it,
@@ -56,8 +58,10 @@ const SIGNAL_INTERVAL: Duration = Duration::from_millis(50);
 ///         whose summary says why).
 ///     OutputError: ``out`` is in use by another run or holds other files;
 ///         with ``resume``, ``out`` is not the directory of a run.
-///     KeyboardInterrupt: Ctrl-C; the run finished its step and wrote a
-///         checkpoint and its summary (status ``"interrupted"``) first.
+///     KeyboardInterrupt: Ctrl-C; the run stopped within its step (the
+///         step's Newton solve ends at its next iteration, the step is not
+///         taken) and wrote a checkpoint of its last step and its summary
+///         (status ``"interrupted"``) first.
 ///         (Python handles signals on its main thread: a run on another
 ///         thread goes on.)
 #[pyfunction]
@@ -119,27 +123,41 @@ pub fn run(
     };
 
     let stop = AtomicBool::new(false);
-    let mut signal: Option<PyErr> = None;
-    let result = py.detach(|| {
-        let mut asked = Instant::now();
-        let mut observer = |_: &StepInfo| {
-            if asked.elapsed() < SIGNAL_INTERVAL || signal.is_some() {
-                return;
-            }
-            asked = Instant::now();
-            if let Err(e) = Python::attach(|py| py.check_signals()) {
+    let control = session.control(Some(&stop));
+    let (loaded, source, dir) = (&loaded, &source, out.as_path());
+    let (result, signal) = std::thread::scope(|scope| {
+        // The run goes on a thread of its own, so that this thread — the
+        // interpreter's main thread, the only one Python tells of a signal
+        // — can ask for signals while a step is under way, however long.
+        let waiting = std::thread::current();
+        let worker = scope.spawn(move || {
+            let result = drape::levels::run_with(
+                &loaded.scenario,
+                (source.file(), &loaded.text),
+                &loaded.setup,
+                dir,
+                &mut |_: &StepInfo| {},
+                control,
+            );
+            waiting.unpark();
+            result
+        });
+        let mut signal: Option<PyErr> = None;
+        // Sleeps with the GIL released; wakes when the run ends or every
+        // SIGNAL_INTERVAL to ask Python whether a signal came.
+        while !worker.is_finished() {
+            py.detach(|| std::thread::park_timeout(SIGNAL_INTERVAL));
+            if signal.is_none()
+                && let Err(e) = py.check_signals()
+            {
                 signal = Some(e);
                 stop.store(true, Ordering::SeqCst);
             }
-        };
-        drape::levels::run_with(
-            &loaded.scenario,
-            (source.file(), &loaded.text),
-            &loaded.setup,
-            &out,
-            &mut observer,
-            session.control(Some(&stop)),
-        )
+        }
+        match worker.join() {
+            Ok(result) => (result, signal),
+            Err(panic) => std::panic::resume_unwind(panic),
+        }
     });
     drop(session);
     match result {
