@@ -293,19 +293,25 @@ print("not interrupted")
 """
 
 
-def test_ctrl_c_stops_the_run_as_the_command_line_does(tmp_path):
-    # A long pedestal (3,000 steps after the fall at 10 x 10: a second or two).
-    doc = short_pedestal()
-    doc["time"]["segments"] = [{"steps": 10, "dt": 0.01}, {"steps": 3000, "dt": 1.0e-4}]
-    scenario = write_scenario(doc, tmp_path / "long.toml")
-    out = tmp_path / "run"
-    child = subprocess.Popen(
+def start_interruptible(scenario: Path, out: Path) -> subprocess.Popen:
+    """`drape.run(scenario, out=out)` in a child that a test interrupts
+    with SIGINT (INTERRUPTED prints what the KeyboardInterrupt said)."""
+    return subprocess.Popen(
         [sys.executable, "-c", INTERRUPTED, str(scenario), str(out)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
         preexec_fn=default_sigint,
     )
+
+
+def test_ctrl_c_stops_the_run_as_the_command_line_does(tmp_path):
+    # A long pedestal (3,000 steps after the fall at 10 x 10: a second or two).
+    doc = short_pedestal()
+    doc["time"]["segments"] = [{"steps": 10, "dt": 0.01}, {"steps": 3000, "dt": 1.0e-4}]
+    scenario = write_scenario(doc, tmp_path / "long.toml")
+    out = tmp_path / "run"
+    child = start_interruptible(scenario, out)
     history = out / "history.csv"
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and (not history.is_file() or history.read_text().count("\n") < 30):
@@ -340,13 +346,7 @@ def test_ctrl_c_reaches_a_step_under_way(tmp_path):
     doc["analysis"]["steps"] = 1
     scenario = write_scenario(doc, tmp_path / "one-increment.toml")
     out = tmp_path / "run"
-    child = subprocess.Popen(
-        [sys.executable, "-c", INTERRUPTED, str(scenario), str(out)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        preexec_fn=default_sigint,
-    )
+    child = start_interruptible(scenario, out)
     history = out / "history.csv"
     deadline = time.monotonic() + 60
     # The history's first row (t = 0) is written before the first step.
