@@ -32,12 +32,15 @@ pub mod self_contact;
 pub use obstacle::{Obstacle, ObstacleError, Proximity};
 pub use penalty::PenaltyHessian;
 
-use crate::vec3::{add, norm, scale, sub};
+use crate::vec3::{add, dot, norm, scale, sub};
 use rayon::prelude::*;
 
 /// Meshes with fewer nodes search for contact on the calling thread (a
 /// thread hand-off costs more than a search of a few thousand nodes).
 const PARALLEL_NODES_ABOVE: usize = 4096;
+
+/// Node–body pairs with a force: `(node, body, force on the node)`.
+type PairForces = Vec<(usize, usize, [f64; 3])>;
 
 /// An obstacle and its prescribed rigid motion.
 #[derive(Debug)]
@@ -312,36 +315,66 @@ impl ContactModel {
         (pairs, min_gap)
     }
 
+    /// The contact force on the fabric of each node–body pair in contact
+    /// at `y`, time `t` (N: `-eta g n` with a penalty, `lambda n` with
+    /// multipliers, `state` holding the converged active set and
+    /// multipliers), in node order; the penalty's stored energy (J); and
+    /// the smallest gap ([`near_pairs`](Self::near_pairs), exact with
+    /// `exact_min_gap`).
+    fn normal_forces(
+        &self,
+        y: &[f64],
+        t: f64,
+        state: &ContactState,
+        exact_min_gap: bool,
+    ) -> (PairForces, f64, f64) {
+        let (pairs, min_gap) = self.near_pairs(y, t, state, 0.0, exact_min_gap);
+        let mut energy = 0.0;
+        let forces = match self.method {
+            ContactMethod::Penalty { stiffness } => pairs
+                .into_iter()
+                .map(|(p, k, prox)| {
+                    energy += 0.5 * stiffness * prox.gap * prox.gap;
+                    (p, k, scale(prox.normal, -stiffness * prox.gap))
+                })
+                .collect(),
+            ContactMethod::Lagrange => (state.active.iter().enumerate())
+                .filter_map(|(p, held)| {
+                    let (k, feature) = (*held)?;
+                    let x = [y[3 * p], y[3 * p + 1], y[3 * p + 2]];
+                    let (prox, _) = self.bodies[k as usize].constraint(x, t, feature);
+                    Some((p, k as usize, scale(prox.normal, state.multipliers[p])))
+                })
+                .collect(),
+        };
+        (forces, energy, min_gap)
+    }
+
+    /// The work the moving obstacles' normal forces do on the fabric over
+    /// a step of `dt` that ended at `y`, time `t` (J): each pair's force at
+    /// the step's end dotted with its body's displacement `v dt` over the
+    /// step (`d/dt` of the contact potential at fixed positions is
+    /// `v . f`). 0 when no obstacle moves, without a search.
+    pub fn normal_work(&self, y: &[f64], t: f64, state: &ContactState, dt: f64) -> f64 {
+        if self.bodies.iter().all(|b| b.velocity == [0.0; 3]) {
+            return 0.0;
+        }
+        let (forces, _, _) = self.normal_forces(y, t, state, false);
+        forces
+            .iter()
+            .map(|(_, k, f)| dot(*f, scale(self.bodies[*k].velocity, dt)))
+            .sum()
+    }
+
     /// The contact report at a converged state. For multipliers, `state`
     /// holds the converged active set and multipliers.
     pub fn report(&self, y: &[f64], t: f64, state: &ContactState) -> ContactReport {
         let nodes = y.len() / 3;
         let mut nodal_forces = vec![[0.0; 3]; nodes];
-        let (pairs, min_gap) = self.near_pairs(y, t, state, 0.0, true);
-        let mut active = 0;
-        let mut energy = 0.0;
-        match self.method {
-            ContactMethod::Penalty { stiffness } => {
-                for (p, _, prox) in &pairs {
-                    active += 1;
-                    energy += 0.5 * stiffness * prox.gap * prox.gap;
-                    nodal_forces[*p] =
-                        add(nodal_forces[*p], scale(prox.normal, -stiffness * prox.gap));
-                }
-            }
-            ContactMethod::Lagrange => {
-                for p in 0..nodes {
-                    if let Some((k, feature)) = state.active[p] {
-                        active += 1;
-                        let (prox, _) = self.bodies[k as usize].constraint(
-                            [y[3 * p], y[3 * p + 1], y[3 * p + 2]],
-                            t,
-                            feature,
-                        );
-                        nodal_forces[p] = scale(prox.normal, state.multipliers[p]);
-                    }
-                }
-            }
+        let (forces, energy, min_gap) = self.normal_forces(y, t, state, true);
+        let active = forces.len();
+        for (p, _, f) in forces {
+            nodal_forces[p] = add(nodal_forces[p], f);
         }
         let resultant = nodal_forces.iter().fold([0.0; 3], |a, f| add(a, *f));
         ContactReport {

@@ -299,6 +299,10 @@ pub struct StepEnergies {
     /// Self-contact's barrier energy (J; 0 without): part of
     /// `history.csv`'s `contact_energy`.
     pub self_contact: f64,
+    /// The work the moving obstacles did on the fabric over the step (J;
+    /// 0 when none moves): their normal and friction forces at the step's
+    /// end dotted with their displacements. Part of `external_work`.
+    pub obstacles: f64,
 }
 
 impl StepEnergies {
@@ -521,11 +525,12 @@ pub(crate) fn solve_step(
             low_rank: LowRank::default(),
         };
         let result = newton::solve(&mut system, y, length, settings, ws);
-        let strain = StepEnergies {
+        let mut strain = StepEnergies {
             membrane: system.strain_energy,
             bending: system.bending_energy,
             self_contact: system.self_contact_energy,
             friction: system.potential.dissipation(),
+            obstacles: system.potential.obstacle_work(),
         };
         let active = std::mem::take(&mut system.active);
         drop(system);
@@ -545,6 +550,9 @@ pub(crate) fn solve_step(
         if !changed {
             if let Some(e) = unstable(model, y) {
                 break e;
+            }
+            if let Some((_, dt)) = terms.start {
+                strain.obstacles += cm.normal_work(y, terms.time, state, dt);
             }
             cm.refresh_features(y, terms.time, state);
             return Ok((total.unwrap_or_else(empty_report), strain));

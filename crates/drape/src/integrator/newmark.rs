@@ -282,7 +282,7 @@ impl Newmark {
             state.velocities[i] += (1.0 - gamma) * dt * state.accelerations[i] + gamma * dt * a1;
             work += 0.5 * (old_ext[i] + ws.f_ext[i]) * (y[i] - state.positions[i]);
         }
-        work += end_gas_steps(model, &gas, &ws.y, state);
+        work += end_gas_steps(model, &gas, &ws.y, state) + energies.obstacles;
         state.persistence = persistence(&state.accelerations, &ws.q, &mut ws.ratios);
         state.accelerations.copy_from_slice(&ws.q);
         std::mem::swap(&mut state.positions, &mut ws.y);

@@ -130,6 +130,14 @@ pub trait StepTerm {
         0.0
     }
 
+    /// The work the moving obstacles did on the fabric through the term
+    /// over the step, at its last evaluation (J): friction's force at the
+    /// step's end on each node, dotted with its obstacle's displacement
+    /// over the step. Default 0.
+    fn obstacle_work(&self) -> f64 {
+        0.0
+    }
+
     /// Adds the Hessian couplings the term has outside the model's
     /// pattern — on `pattern`, a layout the stepper grew with them
     /// (`integrator::grown`), leaving out the rows and columns of the
@@ -247,6 +255,11 @@ impl<'a> IncrementalPotential<'a> {
     /// evaluation (J).
     pub fn dissipation(&self) -> f64 {
         self.terms.iter().map(|t| t.dissipation()).sum()
+    }
+
+    /// [`StepTerm::obstacle_work`] summed over the terms (J).
+    pub fn obstacle_work(&self) -> f64 {
+        self.terms.iter().map(|t| t.obstacle_work()).sum()
     }
 
     /// [`StepTerm::add_outside`] of every term.

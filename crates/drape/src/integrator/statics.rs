@@ -151,7 +151,7 @@ impl StaticStepper {
         for i in 0..ws.y.len() {
             work += 0.5 * (ws.old_ext[i] + ws.f_ext[i]) * (ws.y[i] - state.positions[i]);
         }
-        work += end_gas_steps(model, &gas, &ws.y, state);
+        work += end_gas_steps(model, &gas, &ws.y, state) + energies.obstacles;
         std::mem::swap(&mut state.positions, &mut ws.y);
         state.time = from + lambda;
         state.external_work += work;

@@ -383,6 +383,7 @@ pub(super) fn fresh<'a>(
         // No pair is closer than d̂ in the initial mesh (checked when the
         // model is built).
         self_contact: 0.0,
+        obstacles: 0.0,
     };
     let (stretch0, fractions0) = model.stretch_and_states(&state.positions);
     let contact0 = contact_report(model, &state);

@@ -65,6 +65,7 @@
 use super::super::potential::{Stencils, StepContext, StepTerm, TermValue};
 use crate::contact::{ContactMethod, ContactModel, ContactState, mollifier};
 use crate::solver::SparsePattern;
+use crate::vec3::dot;
 
 /// A node in contact at the start of the step, with what is lagged.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -77,6 +78,8 @@ struct Lagged {
     /// Where the node would be with no slip: its start position carried
     /// by the body's motion over the step (m).
     anchor: [f64; 3],
+    /// The body's displacement over the step, `v h` (m).
+    carried: [f64; 3],
 }
 
 /// What the pairs' `force` stands for.
@@ -97,6 +100,8 @@ pub struct FrictionTerm<'a> {
     smooth: f64,
     /// Dissipation at the last evaluation (J).
     dissipated: f64,
+    /// The moving bodies' work through friction at the last evaluation (J).
+    worked: f64,
 }
 
 impl<'a> FrictionTerm<'a> {
@@ -132,6 +137,7 @@ impl<'a> FrictionTerm<'a> {
                 force: contact.friction_of(k) * lambda,
                 normal,
                 anchor: std::array::from_fn(|i| start[3 * p + i] + v[i] * dt),
+                carried: v.map(|v| v * dt),
             }
         };
         let pairs = match contact.method {
@@ -160,6 +166,7 @@ impl<'a> FrictionTerm<'a> {
             law: Law::Coulomb,
             smooth: contact.stick_speed * dt,
             dissipated: 0.0,
+            worked: 0.0,
         }
     }
 
@@ -189,6 +196,7 @@ impl<'a> FrictionTerm<'a> {
                             force: stiffness,
                             normal: prox.normal,
                             anchor: std::array::from_fn(|i| start[3 * p + i] + v[i] * dt),
+                            carried: v.map(|v| v * dt),
                         }
                     })
                     .collect();
@@ -198,6 +206,7 @@ impl<'a> FrictionTerm<'a> {
                     law: Law::Coulomb,
                     smooth,
                     dissipated: 0.0,
+                    worked: 0.0,
                 }
             }
             ContactMethod::Lagrange => {
@@ -270,7 +279,7 @@ impl StepTerm for FrictionTerm<'_> {
             return self.add_stick(y, g, h);
         }
         let e = self.smooth;
-        let (mut energy, mut dissipated, mut scale) = (0.0, 0.0, 0.0);
+        let (mut energy, mut dissipated, mut scale, mut worked) = (0.0, 0.0, 0.0, 0.0);
         for pair in &self.pairs {
             let p = pair.node;
             let n = pair.normal;
@@ -285,6 +294,8 @@ impl StepTerm for FrictionTerm<'_> {
                 for i in 0..3 {
                     g[3 * p + i] += mu_lambda * f1 * u[i] / s;
                 }
+                // The force on the node is -mu lambda f1 u / s.
+                worked -= mu_lambda * f1 / s * dot(u, pair.carried);
             }
             if let Some(h) = h.as_deref_mut() {
                 // f1 / s, and (f1' - f1 / s) / s^2 multiplying u u^T; at
@@ -298,6 +309,7 @@ impl StepTerm for FrictionTerm<'_> {
             }
         }
         self.dissipated = dissipated;
+        self.worked = worked;
         TermValue {
             value: energy,
             potential: true,
@@ -307,6 +319,10 @@ impl StepTerm for FrictionTerm<'_> {
 
     fn dissipation(&self) -> f64 {
         self.dissipated
+    }
+
+    fn obstacle_work(&self) -> f64 {
+        self.worked
     }
 }
 
@@ -334,12 +350,13 @@ impl FrictionTerm<'_> {
     /// [`StepTerm::add`] sticking: `1/2 k |u|^2` a pair (module docs),
     /// which dissipates nothing.
     fn add_stick(&mut self, y: &[f64], g: &mut [f64], mut h: Option<&mut [f64]>) -> TermValue {
-        let (mut energy, mut scale) = (0.0, 0.0);
+        let (mut energy, mut scale, mut worked) = (0.0, 0.0, 0.0);
         for pair in &self.pairs {
             let (p, n, k) = (pair.node, pair.normal, pair.force);
             let u = self.slip(pair, y);
             let s2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
             energy += 0.5 * k * s2;
+            worked -= k * dot(u, pair.carried);
             scale += k * s2.sqrt();
             for i in 0..3 {
                 g[3 * p + i] += k * u[i];
@@ -349,6 +366,7 @@ impl FrictionTerm<'_> {
             }
         }
         self.dissipated = 0.0;
+        self.worked = worked;
         TermValue {
             value: energy,
             potential: true,
