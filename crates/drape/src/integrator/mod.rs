@@ -405,7 +405,10 @@ fn step_potential<'a>(
             let (pattern, t0) = (model.pattern(), terms.time - dt);
             list.push(Box::new(match terms.friction {
                 FrictionLag::Start => FrictionTerm::new(contact, pattern, (start, t0, dt), state),
-                FrictionLag::Stick => FrictionTerm::stick(contact, pattern, (start, t0, dt), state),
+                FrictionLag::Stick => {
+                    let membrane = model.membrane_stiffness();
+                    FrictionTerm::stick(contact, pattern, (start, t0, dt), state, membrane)
+                }
                 FrictionLag::At(at, lag) => {
                     let lag = lag.unwrap_or(state);
                     FrictionTerm::lagged_at(contact, pattern, (at, terms.time), (start, dt), lag)

@@ -208,6 +208,7 @@ fn stick_force(model: &Model, state: &State, (y, lambda, dlambda): (&[f64], f64,
         model.pattern(),
         (&state.positions, t0, dlambda),
         cs,
+        model.membrane_stiffness(),
     )
     .stick_force(y)
 }

@@ -451,6 +451,15 @@ impl Model {
         self.section
     }
 
+    /// The membrane's stiffness scale `E t` (N/m): the larger diagonal
+    /// entry of the material's tangent at zero strain times the thickness
+    /// — a node's in-plane stiffness, whatever the element size, to order
+    /// one.
+    pub fn membrane_stiffness(&self) -> f64 {
+        let d = self.material.tangent([0.0; 3]);
+        d[0][0].max(d[1][1]) * self.section.thickness
+    }
+
     /// Mass density `rho` (kg/m^3).
     pub fn density(&self) -> f64 {
         self.density

@@ -175,12 +175,16 @@ impl<'a> FrictionTerm<'a> {
     /// is `state`, every node touching an obstacle with friction — a
     /// penalty node closer than the smoothing slip `eps_v dt`, a node of
     /// the multipliers' active set pressed by its multiplier — sticks, held
-    /// along the tangent plane by a spring (`eta`, or `2 mu lambda / e`).
+    /// along the tangent plane by a spring (`eta`, or `2 mu lambda / e`);
+    /// with multipliers, a node touching an obstacle (closer than `eps_v
+    /// dt`) with no multiplier yet sticks by a spring of `membrane` (N/m,
+    /// the membrane's stiffness [`crate::model::Model::membrane_stiffness`]).
     pub fn stick(
         contact: &ContactModel,
         pattern: &'a SparsePattern,
         (start, t0, dt): (&[f64], f64, f64),
         state: &ContactState,
+        membrane: f64,
     ) -> Self {
         let smooth = contact.stick_speed * dt;
         let mut term = match contact.method {
@@ -214,6 +218,27 @@ impl<'a> FrictionTerm<'a> {
                 for pair in &mut term.pairs {
                     pair.force *= 2.0 / smooth;
                 }
+                // A node touching an obstacle with no multiplier yet — every
+                // node of a first increment, which starts unloaded (issue
+                // 46) — is held by a spring as stiff as the membrane.
+                let mut held = vec![false; start.len() / 3];
+                for pair in &term.pairs {
+                    held[pair.node] = true;
+                }
+                let (near, _) = contact.near_pairs(start, t0, state, smooth, false);
+                for (p, k, prox) in near {
+                    if contact.friction_of(k) > 0.0 && !std::mem::replace(&mut held[p], true) {
+                        let v = contact.bodies[k].velocity;
+                        term.pairs.push(Lagged {
+                            node: p,
+                            force: membrane,
+                            normal: prox.normal,
+                            anchor: std::array::from_fn(|i| start[3 * p + i] + v[i] * dt),
+                            carried: v.map(|v| v * dt),
+                        });
+                    }
+                }
+                term.pairs.sort_by_key(|pair| pair.node);
                 term
             }
         };
@@ -482,7 +507,7 @@ mod tests {
             .collect();
         let at: Vec<f64> = start.iter().map(|x| x - 2e-4).collect();
         let terms = [
-            FrictionTerm::stick(contact, model.pattern(), (&start, 0.0, 1e-2), &state),
+            FrictionTerm::stick(contact, model.pattern(), (&start, 0.0, 1e-2), &state, 1.0e3),
             FrictionTerm::lagged_at(
                 contact,
                 model.pattern(),
