@@ -107,7 +107,7 @@ fn a_refinement_conserves_mass_and_weight_and_leaves_rest_at_rest() {
     let coarse = scenario.build(path, &text).unwrap();
     let mesh = coarse.model.mesh();
     let marked: Vec<bool> = (0..mesh.element_count()).map(|e| e % 7 < 2).collect();
-    let transfer = Transfer::new(mesh, &marked).unwrap();
+    let transfer = Transfer::new(mesh, &marked, &[]).unwrap();
     let fine = scenario
         .build_level(path, &text, transfer.refinement.mesh.clone(), Vec::new())
         .unwrap();

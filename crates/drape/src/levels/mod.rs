@@ -8,7 +8,9 @@
 //! scenario has a drape tester: [`crate::measure`]); its mesh is split —
 //! every triangle (`where = "all"`), or those that hold `fraction` of the
 //! curvature indicator ([`indicator`]), closed green so that no node
-//! hangs ([`crate::mesh::refine`]) —; the state is carried onto the new
+//! hangs, the green splits of the level before undone where the split
+//! reaches them so that no triangle is halved twice
+//! ([`crate::mesh::refine`]) —; the state is carried onto the new
 //! mesh with its new nodes on the surface ([`transfer`]); the scenario is
 //! built again on the new mesh, by the one path every term follows
 //! ([`Scenario::build_level`]: supports, loads, monitors, mass, bending
@@ -71,12 +73,15 @@ pub fn run_with(
     let coarse = setup.model.mesh();
     let tester = DrapeTester::find(Some(scenario), coarse, 0.0, Given::default());
     let mut mesh = coarse.clone();
+    // The green splits of the refinement that made the current level: the
+    // next one undoes them where it reaches them.
+    let mut greens = Vec::new();
     for (k, marks) in levels.marks.iter().enumerate() {
         let flags = flags_of(marks, mesh.element_count());
-        mesh = Transfer::new(&mesh, &flags)
+        let refinement = Transfer::new(&mesh, &flags, &greens)
             .map_err(|e| refine_error(out, k + 1, e.to_string()))?
-            .refinement
-            .mesh;
+            .refinement;
+        (mesh, greens) = (refinement.mesh, refinement.greens);
     }
     let mut level: Option<Setup> = match levels.marks.len() {
         0 => None,
@@ -162,8 +167,9 @@ pub fn run_with(
             let eta = indicator::curvature_indicator(model.mesh(), &finished.state.positions);
             indicator::dorfler(&eta, plan.fraction)
         };
-        let transfer = Transfer::new(model.mesh(), &flags)
+        let transfer = Transfer::new(model.mesh(), &flags, &greens)
             .map_err(|e| refine_error(out, k + 1, e.to_string()))?;
+        greens.clone_from(&transfer.refinement.greens);
         levels
             .marks
             .push((0..flags.len()).filter(|&e| flags[e]).collect());

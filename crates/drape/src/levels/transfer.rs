@@ -22,7 +22,7 @@
 
 use crate::bending::{BendingError, edge_midpoints};
 use crate::mesh::Mesh;
-use crate::mesh::refine::{RefineError, Refinement, refine};
+use crate::mesh::refine::{Green, RefineError, Refinement, refine_again};
 
 /// Why a mesh cannot be refined.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -50,15 +50,16 @@ pub struct Transfer {
 }
 
 impl Transfer {
-    /// `mesh` (linear) refined red where `marked`, closed green
-    /// ([`refine`]), each new node placed on its edge's quadratic over the
-    /// reference positions.
+    /// `mesh` (linear) refined red where `marked`, closed green, the green
+    /// splits `greens` of the refinement that made it undone where reached
+    /// ([`refine_again`]; none for a coarse mesh), each new node placed on
+    /// its edge's quadratic over the reference positions.
     ///
     /// # Errors
     /// [`TransferError`]: a mesh of higher order, flags that do not match,
     /// a non-manifold edge.
-    pub fn new(mesh: &Mesh, marked: &[bool]) -> Result<Self, TransferError> {
-        let mut refinement = refine(mesh, marked)?;
+    pub fn new(mesh: &Mesh, marked: &[bool], greens: &[Green]) -> Result<Self, TransferError> {
+        let mut refinement = refine_again(mesh, marked, greens)?;
         let fits = edge_midpoints(mesh)?;
         let rules: Vec<(Vec<usize>, Vec<f64>)> = refinement
             .midpoints
@@ -131,7 +132,7 @@ mod tests {
             p[2] = z(*p);
         }
         let marked: Vec<bool> = (0..mesh.element_count()).map(|e| e % 3 == 0).collect();
-        let t = Transfer::new(&mesh, &marked).unwrap();
+        let t = Transfer::new(&mesh, &marked, &[]).unwrap();
         let fine = &t.refinement.mesh;
         assert!(fine.node_count() > mesh.node_count());
         // The refined reference is the carried reference.
@@ -165,7 +166,7 @@ mod tests {
         // (a boundary edge's node is its chord's midpoint).
         let plane = generate::disc(1.0, 6, [0.0; 3], ElementOrder::Linear);
         let rim = plane.boundary_nodes();
-        let flat_t = Transfer::new(&plane, &marked).unwrap();
+        let flat_t = Transfer::new(&plane, &marked, &[]).unwrap();
         let f = |p: [f64; 3]| {
             [
                 p[0] * p[0] - 0.5 * p[0] * p[1],

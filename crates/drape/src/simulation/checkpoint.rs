@@ -35,6 +35,11 @@
 //! changed, naming it. A path is kept as the bytes of the operating
 //! system's string (Unix), so that any path survives.
 //!
+//! Version 10 has version 9's layout; its refinements replay with green
+//! splits undone ([`crate::mesh::refine::refine_again`]). A file of
+//! version 9 or older that refined twice or more is refused (its second
+//! refinement would replay to another mesh); one that refined once
+//! resumes as before.
 //! Version 6 (drape before self-contact's layout) is read with no layout:
 //! a run without self-contact resumes bit for bit, one with it grows its
 //! layout again at its first step.
@@ -72,7 +77,7 @@ use crate::solver::{KeptFactor, KeptLinear, KeptMultigrid, LinearStats};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"DRAPECKP";
-const VERSION: u32 = 9;
+const VERSION: u32 = 10;
 
 /// Longest key of an input file (bytes).
 const MAX_KEY_BYTES: usize = 256;
@@ -271,6 +276,22 @@ fn read_levels(r: &mut Reader) -> Result<Levels, CheckpointError> {
         });
     }
     Ok(Levels { marks, records })
+}
+
+/// [`read_levels`] of a file of `version`: one before version 10 that
+/// refined twice or more is refused — its second refinement halved green
+/// halves again, where this drape undoes them ([`crate::mesh::refine`]),
+/// so replaying it would make another mesh.
+fn read_levels_of(r: &mut Reader, version: u32) -> Result<Levels, CheckpointError> {
+    let levels = read_levels(r)?;
+    if version < 10 && levels.marks.len() >= 2 {
+        return Err(invalid(format!(
+            "version {version} with {} refinements: its refinements after the first cannot be \
+             replayed by this drape (it undoes green splits; issue 43); start the run afresh",
+            levels.marks.len()
+        )));
+    }
+    Ok(levels)
 }
 
 /// Reads the pending sub-steps (version 8): at most one per halving of a
@@ -533,7 +554,7 @@ impl Checkpoint {
         let most = r.remaining() / 16;
         read_inputs(&mut r, version, most)?;
         if version >= 8 {
-            read_levels(&mut r)
+            read_levels_of(&mut r, version)
         } else {
             Ok(Levels::default())
         }
@@ -575,7 +596,7 @@ impl Checkpoint {
             Self::check_inputs(recorded, current)?;
         }
         let (levels, pending) = if version >= 8 {
-            (read_levels(&mut r)?, read_pending(&mut r)?)
+            (read_levels_of(&mut r, version)?, read_pending(&mut r)?)
         } else {
             (Levels::default(), Vec::new())
         };
@@ -1617,6 +1638,32 @@ mod tests {
     /// Values out of range are refused naming the field, whatever their
     /// checksum: each counter against the others, the state's numbers, the
     /// contact state, the frames; and a version this drape does not know.
+    /// A version 9 file that refined once resumes as before; one that
+    /// refined twice is refused, saying why: its second refinement halved
+    /// green halves again, which this drape's refinement undoes.
+    #[test]
+    fn refuses_an_older_multilevel_record_it_would_replay_to_another_mesh() {
+        let mut c = sample(true);
+        let v9 = |c: &Checkpoint| {
+            let bytes = c.to_bytes();
+            seal(bytes[..bytes.len() - 8].to_vec(), 9)
+        };
+        assert_eq!(Checkpoint::recorded_levels(&v9(&c)).unwrap(), c.levels);
+        c.levels.marks.push(vec![1, 4]);
+        let e = Checkpoint::recorded_levels(&v9(&c))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("version 9 with 2 refinements") && e.contains("afresh"),
+            "{e}"
+        );
+        // The same record written by this drape is read back.
+        assert_eq!(
+            Checkpoint::recorded_levels(&c.to_bytes()).unwrap(),
+            c.levels
+        );
+    }
+
     #[test]
     fn refuses_values_out_of_range_and_unknown_versions() {
         let refused = |change: &dyn Fn(&mut Checkpoint), says: &str| {
@@ -1718,11 +1765,13 @@ mod tests {
         // A later version is refused by name.
         let mut later = sample(true).to_bytes();
         later.truncate(later.len() - 8);
-        let later = seal(later, 10);
+        let later = seal(later, VERSION + 1);
         let e = Checkpoint::from_bytes(&later, 6, 2, 0xdead_beef).unwrap_err();
         assert!(
-            e.to_string()
-                .contains("version 10, this drape reads versions 1 to 9"),
+            e.to_string().contains(&format!(
+                "version {}, this drape reads versions 1 to {VERSION}",
+                VERSION + 1
+            )),
             "{e}"
         );
     }
