@@ -12,7 +12,8 @@
 //! through a triangle between its nodes. Here each obstacle's sharp
 //! features are sampled as points ([`Obstacle::sharp_points`]: a box's
 //! corners and edges, a capped cylinder's two rims, a rounded shape's
-//! fillets' outer points) no farther apart than half the fabric's
+//! fillets' outer points, a triangle mesh's convex edges turning by more
+//! than 10° and their ends) no farther apart than half the fabric's
 //! shortest edge, so that no triangle lies across a feature between two
 //! points, and each point `p` is penalised against its triangle `(a, b,
 //! c)`:
@@ -77,8 +78,7 @@
 //!
 //! What it leaves out: friction of the features (the nodes' friction
 //! acts), multipliers (`method = "lagrange"` keeps node-to-surface only),
-//! the sharp edges of triangle-mesh obstacles (a mesh's vertices and edges
-//! are not sampled yet), and a point that crosses a triangle other than
+//! and a point that crosses a triangle other than
 //! its pair within a step is caught only at the next step (by at most
 //! what the fabric moves in a step). On coarse meshes (elements several
 //! times the obstacle's fillet and a good fraction of its size) a
