@@ -148,8 +148,8 @@ pub struct FeaturePair {
 impl ObstacleFeatures {
     /// The sharp features of `contact`'s obstacles against `triangles` (a
     /// linear mesh's elements, a higher order's sub-triangles) at the rest
-    /// positions `x`: sampled at half the shortest edge (doubled until at
-    /// most [`MAX_POINTS`]), reaching half the longest. `None` when no
+    /// positions `x`: sampled at half the shortest edge (or coarser, to
+    /// at most [`MAX_POINTS`]), reaching half the longest. `None` when no
     /// obstacle has a sharp feature (planes, spheres) or the mesh has no
     /// edge of positive length.
     pub fn new(contact: &ContactModel, triangles: Vec<[usize; 3]>, x: &[f64]) -> Option<Self> {
@@ -167,14 +167,19 @@ impl ObstacleFeatures {
         if !(shortest.is_finite() && longest > 0.0) {
             return None;
         }
-        let mut spacing = 0.5 * shortest;
         let sample = |spacing: f64| -> Vec<Vec<SharpPoint>> {
             (contact.bodies.iter())
                 .map(|b| b.shape.sharp_points(spacing))
                 .collect()
         };
+        let count = |points: &[Vec<SharpPoint>]| points.iter().map(Vec::len).sum::<usize>();
+        // The features' length, about, from a coarse sampling: a sliver of
+        // an edge must not ask for billions of points before they are
+        // counted.
+        let length = count(&sample(longest)) as f64 * longest;
+        let mut spacing = (0.5 * shortest).max(2.0 * length / MAX_POINTS as f64);
         let mut points = sample(spacing);
-        while points.iter().map(Vec::len).sum::<usize>() > MAX_POINTS {
+        while count(&points) > MAX_POINTS {
             spacing *= 2.0;
             points = sample(spacing);
         }
@@ -413,4 +418,33 @@ impl BodyFeatures {
 /// coordinates stay representable.
 fn cell_of(x: [f64; 3], cell: f64) -> [i64; 3] {
     x.map(|v| (v / cell).floor().clamp(-1e15, 1e15) as i64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::obstacle::BoxObstacle;
+    use crate::contact::{DEFAULT_STICK_SPEED, RigidBody};
+
+    /// A fabric with a sliver edge of 1 nm on a 1 m box: the spacing is
+    /// coarsened to at most `MAX_POINTS` points (not half a nanometre),
+    /// and the points still lie within the spacing of each other.
+    #[test]
+    fn a_sliver_edge_does_not_ask_for_billions_of_points() {
+        let contact = ContactModel {
+            bodies: vec![RigidBody {
+                shape: Box::new(BoxObstacle::new([-0.5; 3], [0.5; 3]).expect("a box")),
+                velocity: [0.0; 3],
+            }],
+            method: crate::contact::ContactMethod::Penalty { stiffness: 5e4 },
+            friction: 0.0,
+            body_friction: Vec::new(),
+            stick_speed: DEFAULT_STICK_SPEED,
+            features: true,
+        };
+        let x = [0.0, 0.0, 1.0, 0.01, 0.0, 1.0, 0.01, 1e-9, 1.0];
+        let features = ObstacleFeatures::new(&contact, vec![[0, 1, 2]], &x).expect("features");
+        assert!(features.point_count() <= MAX_POINTS);
+        assert!(features.spacing() > 1e-5, "spacing {}", features.spacing());
+    }
 }
