@@ -291,6 +291,14 @@ fn check(path: &Path) -> Result<(), Failure> {
             gas.temperature
         );
     }
+    if let Some(f) = m.obstacle_features() {
+        println!(
+            "  features  {} points of the obstacles' corners, edges and rims, at most {:.3e} m apart, kept out of {} triangles",
+            f.point_count(),
+            f.spacing(),
+            f.triangles().len()
+        );
+    }
     if let Some(sc) = m.self_contact() {
         let friction = if sc.friction() > 0.0 {
             format!("friction {} between the layers", human(sc.friction()))

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{column, fabric, read_history, setup, temp_dir};
+use common::{column, drive, fabric, read_history, setup, temp_dir};
 use drape::contact::obstacle::{
     BoxObstacle, CylinderObstacle, PlaneObstacle, Rounded, SphereObstacle, TriMeshObstacle,
 };
@@ -81,6 +81,7 @@ fn penalty_terms(
         friction: 0.0,
         body_friction: Vec::new(),
         stick_speed: drape::contact::DEFAULT_STICK_SPEED,
+        features: false,
     };
     let pattern = SparsePattern::new(1, std::iter::once(&[0usize][..]));
     let mut g = vec![0.0; 3];
@@ -198,6 +199,7 @@ fn penalty_force_and_hessian_match_finite_differences_for_every_obstacle() {
                 friction: 0.0,
                 body_friction: Vec::new(),
                 stick_speed: drape::contact::DEFAULT_STICK_SPEED,
+                features: false,
             };
             let hints = model.initial_state(&y0);
             let moved = [0, 1, 2].map(|i| y0[i] + 0.3 * body.velocity[i]);
@@ -399,30 +401,6 @@ fn fabric_on_pedestal_runs_with_both_methods() {
             summary.newton_iterations, summary.cutbacks, summary.monitors["center"]
         );
     }
-}
-
-/// Steps a dynamic setup through its schedule (no cut-back), calling
-/// `check` after every step.
-fn drive(
-    s: &drape::setup::Setup,
-    mut check: impl FnMut(&drape::integrator::State),
-) -> drape::integrator::State {
-    use drape::integrator::newmark::DynamicWorkspace;
-    let drape::setup::Analysis::Dynamic { newmark, segments } = &s.analysis else {
-        panic!("dynamic only")
-    };
-    let mut ws = DynamicWorkspace::new(&s.model).unwrap();
-    let mut state = newmark.initial_state(&s.model, &mut ws).unwrap();
-    let length = drape::simulation::reference_length(&s.model.initial_positions());
-    for (n, dt) in segments {
-        for _ in 0..*n {
-            newmark
-                .step(&s.model, &mut state, *dt, &s.newton, length, &mut ws)
-                .unwrap();
-            check(&state);
-        }
-    }
-    state
 }
 
 fn example_setup(example: &str) -> drape::setup::Setup {

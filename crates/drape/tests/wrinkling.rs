@@ -112,6 +112,9 @@ every = 1
     }
 }
 
+/// The bundled `example` with `wrinkling`, node to surface (`[contact]
+/// features = false`, as its multipliers' twin), the side and corner
+/// monitors added if `extra_monitors`: its history and summary.
 fn run(
     example: &str,
     wrinkling: &str,
@@ -136,6 +139,10 @@ fn run_with(
         .map(|l| {
             if l.starts_with("wrinkling") {
                 format!("wrinkling = \"{wrinkling}\"")
+            } else if l.starts_with("features") {
+                // Node to surface, as with multipliers (which keep no
+                // obstacle features): the methods are compared alike.
+                "features = false".to_string()
             } else if let (Some(c), true) = (chord_steps, l.starts_with("max_iterations")) {
                 format!("{l}\nchord_steps = {c}")
             } else {

@@ -115,6 +115,40 @@ fn distance_parts(
     x: &[[f64; 3]; 4],
     c: &Closest,
 ) -> (f64, [f64; 12], [f64; 144], Vec<[f64; 12]>) {
+    distance_parts_along(x, c, kind.directions(&c.weights))
+}
+
+/// The squared distance `s` of point `x[0]` to the plane of the triangle
+/// `(x[1], x[2], x[3])`, its gradient (12, node-major) and Hessian (12 x
+/// 12, row-major): the point–triangle distance's face region (module
+/// docs) with the projection's barycentric coordinates left free of the
+/// triangle's bounds. `None` for a triangle of no area.
+pub fn point_plane_squared_distance(x: &[[f64; 3]; 4]) -> Option<(f64, [f64; 12], [f64; 144])> {
+    let (u, v, p) = (sub(x[2], x[1]), sub(x[3], x[1]), sub(x[0], x[1]));
+    let (uu, uv, vv, pu, pv) = (dot(u, u), dot(u, v), dot(v, v), dot(p, u), dot(p, v));
+    let det = uu * vv - uv * uv;
+    // Also refuses a NaN determinant.
+    if det.is_nan() || det <= 1e-14 * uu * vv {
+        return None;
+    }
+    let (b, c) = ((vv * pu - uv * pv) / det, (uu * pv - uv * pu) / det);
+    let weights = [1.0, -(1.0 - b - c), -b, -c];
+    let r = (0..4).fold([0.0; 3], |acc, i| add(acc, scale(x[i], weights[i])));
+    let closest = Closest {
+        d2: dot(r, r),
+        weights,
+    };
+    let along = vec![[0.0, 1.0, -1.0, 0.0], [0.0, 1.0, 0.0, -1.0]];
+    let (s, g, h, _) = distance_parts_along(x, &closest, along);
+    Some((s, g, h))
+}
+
+/// [`distance_parts`] with the free parameters' directions `dirs` given.
+fn distance_parts_along(
+    x: &[[f64; 3]; 4],
+    c: &Closest,
+    mut dirs: Vec<[f64; 4]>,
+) -> (f64, [f64; 12], [f64; 144], Vec<[f64; 12]>) {
     let w = c.weights;
     let r = (0..4).fold([0.0; 3], |acc, i| add(acc, scale(x[i], w[i])));
     let mut g = [0.0; 12];
@@ -131,7 +165,6 @@ fn distance_parts(
             }
         }
     }
-    let mut dirs = kind.directions(&w);
     let along = |a: &[f64; 4]| (0..4).fold([0.0; 3], |acc, i| add(acc, scale(x[i], a[i])));
     let mut d: Vec<[f64; 3]> = dirs.iter().map(along).collect();
     if d.len() == 2 {

@@ -23,6 +23,7 @@
 //! one it penetrates most (Lagrange), or with all of them (penalty).
 
 pub mod barrier;
+pub mod features;
 pub mod lagrange;
 pub mod obstacle;
 pub mod penalty;
@@ -129,6 +130,10 @@ pub struct ContactModel {
     /// smoothing of Li et al. 2020): the creep speed of a fabric that
     /// sticks.
     pub stick_speed: f64,
+    /// Whether the obstacles' sharp features (corners, edges, rims) are
+    /// kept out of the fabric's triangles too, with the penalty
+    /// ([`features`]; `[contact] features`). Nothing with multipliers.
+    pub features: bool,
 }
 
 /// The default `[contact] stick_speed` (m/s): creep of at most 1 mm in
@@ -424,6 +429,7 @@ mod tests {
             friction: 0.0,
             body_friction: Vec::new(),
             stick_speed: DEFAULT_STICK_SPEED,
+            features: false,
         };
         // Points on a lattice through the boxes' faces, edges and corners,
         // each also nudged by +-1e-12 m (inside the touching band) and
@@ -487,6 +493,7 @@ mod tests {
             friction: 0.0,
             body_friction: Vec::new(),
             stick_speed: DEFAULT_STICK_SPEED,
+            features: false,
         };
         let y = [
             0.0, 0.0, 0.01, // 0: above both: free

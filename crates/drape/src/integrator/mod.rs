@@ -22,8 +22,8 @@ use crate::solver::newton::{
 };
 use potential::{IncrementalPotential, StepContext, StepTerm};
 use terms::{
-    BendingTerm, FrictionTerm, GasTerm, InertiaTerm, LoadTerm, MembraneTerm, PenaltyTerm,
-    SelfContactTerm, SelfFrictionTerm,
+    BendingTerm, FeatureTerm, FrictionTerm, GasTerm, InertiaTerm, LoadTerm, MembraneTerm,
+    PenaltyTerm, SelfContactTerm, SelfFrictionTerm,
 };
 
 /// The state carried from step to step.
@@ -102,6 +102,9 @@ pub(crate) struct StepSystem<'a> {
     /// Self-contact's barrier energy at the last evaluation (J; 0
     /// without).
     pub self_contact_energy: f64,
+    /// The obstacle features' penalty energy at the last evaluation (J;
+    /// 0 without).
+    pub features_energy: f64,
     /// Lagrange: the active nodes at the last evaluation.
     pub active: Vec<ActiveNode>,
     /// The nodes whose stencils' Hessians are projected to their
@@ -174,6 +177,10 @@ impl NewtonSystem for StepSystem<'_> {
         self.self_contact_energy = self
             .potential
             .value("self-contact")
+            .map_or(0.0, |v| v.value);
+        self.features_energy = self
+            .potential
+            .value("obstacle features")
             .map_or(0.0, |v| v.value);
         let grown = self.grown.as_deref().filter(|_| h.is_some());
         let pattern = grown.map_or(model.pattern(), |g| &g.pattern);
@@ -303,6 +310,9 @@ pub struct StepEnergies {
     /// 0 when none moves): their normal and friction forces at the step's
     /// end dotted with their displacements. Part of `external_work`.
     pub obstacles: f64,
+    /// The obstacle features' penalty energy (J; 0 without): part of
+    /// `history.csv`'s `contact_energy`.
+    pub features: f64,
 }
 
 impl StepEnergies {
@@ -395,6 +405,13 @@ fn step_potential<'a>(
                 model.pattern(),
                 stiffness,
             )));
+            if let Some(features) = model.obstacle_features() {
+                list.push(Box::new(FeatureTerm::new(
+                    features,
+                    model.pattern(),
+                    stiffness,
+                )));
+            }
         }
         // Friction lags the normal force and the tangent plane of the
         // step's start (the contact state is the step's start's too), or
@@ -520,6 +537,7 @@ pub(crate) fn solve_step(
             strain_energy: 0.0,
             bending_energy: 0.0,
             self_contact_energy: 0.0,
+            features_energy: 0.0,
             active: Vec::new(),
             project: Vec::new(),
             projecting: false,
@@ -532,6 +550,7 @@ pub(crate) fn solve_step(
             membrane: system.strain_energy,
             bending: system.bending_energy,
             self_contact: system.self_contact_energy,
+            features: system.features_energy,
             friction: system.potential.dissipation(),
             obstacles: system.potential.obstacle_work(),
         };

@@ -14,8 +14,9 @@ mod mass;
 pub use mass::MassKind;
 
 use crate::bending::{Bending, BendingRigidity};
-use crate::contact::ContactModel;
+use crate::contact::features::ObstacleFeatures;
 use crate::contact::self_contact::{SelfContact, SelfContactSpec};
+use crate::contact::{ContactMethod, ContactModel};
 use crate::element::ElementGeometry;
 use crate::element::geometry::MembraneIntegration;
 use crate::element::membrane::Section;
@@ -89,6 +90,8 @@ pub struct Model {
     bending: Option<Bending>,
     /// Self-contact, if any.
     self_contact: Option<SelfContact>,
+    /// The obstacles' sharp features kept out of the triangles, if any.
+    features: Option<ObstacleFeatures>,
     /// The cavities filled with gas (none: no gas term).
     cavities: Vec<GasCavity>,
 }
@@ -214,6 +217,16 @@ impl ModelBuilder {
             ),
             None => None,
         };
+        let features = contact
+            .as_ref()
+            .filter(|c| c.features && matches!(c.method, ContactMethod::Penalty { .. }))
+            .and_then(|c| {
+                ObstacleFeatures::new(
+                    c,
+                    crate::bending::triangulate(&mesh).0,
+                    &mesh.nodes.concat(),
+                )
+            });
         let p = mesh.order.degree();
         let geometry = match membrane.resolve(bending.is_some()) {
             MembraneIntegration::SubTriangles if p > 1 => ElementGeometry::on_sub_triangles(
@@ -268,6 +281,7 @@ impl ModelBuilder {
             contact,
             bending,
             self_contact,
+            features,
             cavities,
         })
     }
@@ -492,9 +506,16 @@ impl Model {
         self.contact.as_ref()
     }
 
-    /// Bending stiffness, if any, attached to [`Model::pattern`].
+    /// Self-contact, if any.
     pub fn self_contact(&self) -> Option<&SelfContact> {
         self.self_contact.as_ref()
+    }
+
+    /// The obstacles' sharp features kept out of the fabric's triangles
+    /// (penalty contact with `[contact] features`, obstacles with
+    /// corners, edges or rims), if any.
+    pub fn obstacle_features(&self) -> Option<&ObstacleFeatures> {
+        self.features.as_ref()
     }
 
     /// Bending stiffness, if any.

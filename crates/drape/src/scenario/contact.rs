@@ -55,6 +55,13 @@ pub struct PenaltySpec {
     /// thickness. Only with `self = true`.
     #[serde(default)]
     pub self_distance: Option<f64>,
+    /// Whether the obstacles' sharp features — a box's corners and edges,
+    /// a cylinder's rims — are kept out of the fabric's triangles too
+    /// (issue 46, [`crate::contact::features`]), with the same penalty:
+    /// `true` or `false`. Default false: the nodes alone are kept out of
+    /// the obstacles (node-to-surface), as in release 1.
+    #[serde(default)]
+    pub features: bool,
 }
 
 fn default_stick_speed() -> f64 {
@@ -152,18 +159,20 @@ pub(super) fn build_contact(
             ))
         }
     };
-    let (method, friction, stick_speed) = match spec {
+    let (method, friction, stick_speed, features) = match spec {
         ContactSpec::Penalty(p) => (
             ContactMethod::Penalty {
                 stiffness: c.positive(t, None, "penalty", p.penalty)?,
             },
             friction_of(p.friction)?,
             c.positive(t, None, "stick_speed", p.stick_speed)?,
+            p.features,
         ),
         ContactSpec::Lagrange(l) => (
             ContactMethod::Lagrange,
             friction_of(l.friction)?,
             c.positive(t, None, "stick_speed", l.stick_speed)?,
+            false,
         ),
     };
     let bodies = (s.obstacles.iter().enumerate())
@@ -190,6 +199,7 @@ pub(super) fn build_contact(
         friction,
         body_friction,
         stick_speed,
+        features,
     }))
 }
 

@@ -171,6 +171,7 @@ mod tests {
                 stick_speed: crate::contact::DEFAULT_STICK_SPEED,
                 self_contact: false,
                 self_distance: None,
+                features: false,
             }))
         );
     }

@@ -322,7 +322,7 @@ impl History<'_> {
             None => (0.0, 0.0, f64::NAN, 0.0),
         };
         let strain = r.energies.strain();
-        let contact_energy = contact_energy + r.energies.self_contact;
+        let contact_energy = contact_energy + r.energies.self_contact + r.energies.features;
         let mut row = vec![
             r.step as f64,
             state.time,

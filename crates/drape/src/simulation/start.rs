@@ -384,6 +384,7 @@ pub(super) fn fresh<'a>(
         // model is built).
         self_contact: 0.0,
         obstacles: 0.0,
+        features: features_energy(model, &state.positions),
     };
     let (stretch0, fractions0) = model.stretch_and_states(&state.positions);
     let contact0 = contact_report(model, &state);
@@ -434,5 +435,18 @@ fn step_controller(
                 .map(Some)
         }
         _ => Ok(None),
+    }
+}
+
+/// The obstacle features' penalty energy at `y`, `t = 0` (J; 0 without): a
+/// feature may start a hair through the fabric (the gripped drape tester's
+/// rims).
+fn features_energy(model: &crate::model::Model, y: &[f64]) -> f64 {
+    match (model.obstacle_features(), model.contact().map(|c| c.method)) {
+        (Some(f), Some(crate::contact::ContactMethod::Penalty { stiffness })) => {
+            let pairs = f.pairs(y, 0.0);
+            f.add_penalty(stiffness, &pairs, y, 0.0, &mut vec![0.0; y.len()], None)
+        }
+        _ => 0.0,
     }
 }

@@ -303,3 +303,27 @@ pub fn stops_and_resumes_bit_for_bit(
     let read = |d: &Path| std::fs::read(d.join("history.csv")).unwrap();
     assert_eq!(read(&whole), read(&out));
 }
+
+/// Steps a dynamic setup through its schedule (no cut-back), calling
+/// `check` after every step.
+pub fn drive(
+    s: &drape::setup::Setup,
+    mut check: impl FnMut(&drape::integrator::State),
+) -> drape::integrator::State {
+    use drape::integrator::newmark::DynamicWorkspace;
+    let drape::setup::Analysis::Dynamic { newmark, segments } = &s.analysis else {
+        panic!("dynamic only")
+    };
+    let mut ws = DynamicWorkspace::new(&s.model).unwrap();
+    let mut state = newmark.initial_state(&s.model, &mut ws).unwrap();
+    let length = drape::simulation::reference_length(&s.model.initial_positions());
+    for (n, dt) in segments {
+        for _ in 0..*n {
+            newmark
+                .step(&s.model, &mut state, *dt, &s.newton, length, &mut ws)
+                .unwrap();
+            check(&state);
+        }
+    }
+    state
+}

@@ -28,8 +28,8 @@
 //!   `dn/dy = 0`.
 
 use super::{
-    Obstacle, ObstacleError, Proximity, TOUCH_TOLERANCE, check_finite, diagonal, identity_minus,
-    plane_proximity, show_point,
+    Obstacle, ObstacleError, Proximity, SharpPoint, TOUCH_TOLERANCE, check_finite, diagonal,
+    identity_minus, normalised, plane_proximity, sample_segment, show_point,
 };
 use crate::vec3::{norm, scale, sub};
 
@@ -206,6 +206,42 @@ impl Obstacle for BoxObstacle {
 
     fn describe(&self) -> String {
         format!("box {}..{}", show_point(self.min), show_point(self.max))
+    }
+
+    /// The eight corners (outward `(±1, ±1, ±1)/√3`) and the points inside
+    /// the twelve edges (outward the mean of the two faces' normals).
+    fn sharp_points(&self, spacing: f64) -> Vec<SharpPoint> {
+        let corner = |c: usize| -> [f64; 3] {
+            std::array::from_fn(|k| {
+                if c >> k & 1 == 1 {
+                    self.max[k]
+                } else {
+                    self.min[k]
+                }
+            })
+        };
+        let sign = |c: usize, k: usize| if c >> k & 1 == 1 { 1.0 } else { -1.0 };
+        let mut out: Vec<SharpPoint> = (0..8)
+            .map(|c| SharpPoint {
+                position: corner(c),
+                outward: normalised([sign(c, 0), sign(c, 1), sign(c, 2)]),
+            })
+            .collect();
+        // Edge along axis k from corner c (bit k clear) to c + 2^k.
+        for k in 0..3 {
+            for c in (0..8).filter(|c| c >> k & 1 == 0) {
+                let mut m = [sign(c, 0), sign(c, 1), sign(c, 2)];
+                m[k] = 0.0;
+                sample_segment(
+                    corner(c),
+                    corner(c | 1 << k),
+                    normalised(m),
+                    spacing,
+                    &mut out,
+                );
+            }
+        }
+        out
     }
 }
 

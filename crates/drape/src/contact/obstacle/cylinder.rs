@@ -43,8 +43,9 @@
 //!   ([`CylinderObstacle::reference_radial`]) and `dn/dy = 0`.
 
 use super::{
-    Obstacle, ObstacleError, Proximity, TOUCH_TOLERANCE, ZERO3, check_finite, check_positive,
-    cuboid::argmax, identity_minus, plane_proximity, show_point, unit,
+    Obstacle, ObstacleError, Proximity, SharpPoint, TOUCH_TOLERANCE, ZERO3, check_finite,
+    check_positive, cuboid::argmax, identity_minus, normalised, pieces, plane_proximity,
+    show_point, unit,
 };
 use crate::vec3::{add, cross, dot, norm, scale, sub};
 
@@ -252,6 +253,28 @@ impl Obstacle for CylinderObstacle {
             self.radius,
             self.height
         )
+    }
+
+    /// The two rim circles, each cut into equal arcs no longer than
+    /// `spacing`: outward the mean of the cap's normal and the radial
+    /// direction.
+    fn sharp_points(&self, spacing: f64) -> Vec<SharpPoint> {
+        let u = self.reference_radial;
+        let w = cross(self.axis, u);
+        let n = pieces(std::f64::consts::TAU * self.radius, spacing).max(3);
+        let bottom = sub(self.center, scale(self.axis, self.height));
+        let mut out = Vec::with_capacity(2 * n);
+        for (centre, cap) in [(self.center, self.axis), (bottom, scale(self.axis, -1.0))] {
+            for i in 0..n {
+                let phi = std::f64::consts::TAU * i as f64 / n as f64;
+                let radial = add(scale(u, phi.cos()), scale(w, phi.sin()));
+                out.push(SharpPoint {
+                    position: add(centre, scale(radial, self.radius)),
+                    outward: normalised(add(cap, radial)),
+                });
+            }
+        }
+        out
     }
 }
 

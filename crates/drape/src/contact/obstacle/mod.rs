@@ -204,6 +204,66 @@ pub trait Obstacle: Send + Sync + std::fmt::Debug {
     fn constraint(&self, y: [f64; 3], feature: u32) -> (Proximity, bool) {
         (self.proximity(y, Some(feature)), true)
     }
+
+    /// The obstacle's sharp convex features — corners, edges, rim circles —
+    /// as points no farther apart than `spacing` (m) along each edge or
+    /// rim, each with its outward direction: what
+    /// [`crate::contact::features`] keeps out of the fabric's triangles,
+    /// where node-to-surface contact cannot see them (between nodes).
+    /// Default none: a smooth surface (plane, sphere) has no feature a
+    /// fabric's nodes would not meet first.
+    fn sharp_points(&self, _spacing: f64) -> Vec<SharpPoint> {
+        Vec::new()
+    }
+}
+
+/// A point of an obstacle's sharp feature ([`Obstacle::sharp_points`]), in
+/// the obstacle's frame at `t = 0`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SharpPoint {
+    /// Where it is (m).
+    pub position: [f64; 3],
+    /// The feature's outward direction (unit): the normalised sum of the
+    /// outward normals of the faces that meet there, the axis of the
+    /// feature's cone of normals. The obstacle lies on its negative side.
+    pub outward: [f64; 3],
+}
+
+/// `n` points strictly inside the segment `a`–`b`, spaced equally and at
+/// most `spacing` apart (its ends are corners, sampled on their own), each
+/// with the outward direction `outward`.
+fn sample_segment(
+    a: [f64; 3],
+    b: [f64; 3],
+    outward: [f64; 3],
+    spacing: f64,
+    out: &mut Vec<SharpPoint>,
+) {
+    let pieces = pieces(norm(crate::vec3::sub(b, a)), spacing);
+    for i in 1..pieces {
+        let s = i as f64 / pieces as f64;
+        out.push(SharpPoint {
+            position: std::array::from_fn(|k| a[k] + s * (b[k] - a[k])),
+            outward,
+        });
+    }
+}
+
+/// How many equal pieces a curve of `length` (m) is cut into so that none
+/// is longer than `spacing` (at least 1; a non-positive or non-finite
+/// spacing gives 1).
+fn pieces(length: f64, spacing: f64) -> usize {
+    let n = (length / spacing).ceil();
+    if n.is_finite() && n >= 1.0 {
+        n.min(u32::MAX as f64) as usize
+    } else {
+        1
+    }
+}
+
+/// `v / |v|` of a non-zero vector.
+fn normalised(v: [f64; 3]) -> [f64; 3] {
+    scale(v, 1.0 / norm(v))
 }
 
 /// Invalid obstacle data: a scenario's numbers or a mesh file.
@@ -570,6 +630,66 @@ mod tests {
         assert!(norm(crate::vec3::sub(moved.closest, direct.closest)) < 1e-15);
         assert!(norm(crate::vec3::sub(moved.normal, direct.normal)) < 1e-15);
         assert!(!moved.is_penetrating());
+    }
+
+    /// Every sharp point lies on its obstacle's surface (gap 0 within
+    /// round-off), its outward direction is a unit vector along which the
+    /// gap grows, the points of an edge or rim are at most the spacing
+    /// apart, a box has its 8 corners and a cylinder's rims their circles;
+    /// a rounded box's points are its sharp core's moved out by the radius.
+    #[test]
+    fn sharp_points_lie_on_the_edges_at_most_the_spacing_apart() {
+        let spacing = 0.013;
+        let b = BoxObstacle::new([-0.05, -0.04, -0.25], [0.05, 0.06, -0.05]).unwrap();
+        let c = CylinderObstacle::new([0.0, 0.0, 0.01], [0.0, 0.6, 0.8], 0.09, 0.2).unwrap();
+        let r = Rounded::new(
+            BoxObstacle::new([-0.049, -0.039, -0.249], [0.049, 0.059, -0.051]).unwrap(),
+            1e-3,
+        );
+        let shapes: [(&dyn Obstacle, usize); 3] = [(&b, 8), (&c, 0), (&r, 8)];
+        for (shape, corners) in shapes {
+            let points = shape.sharp_points(spacing);
+            assert!(points.len() > 20, "{}", shape.describe());
+            for p in &points {
+                assert!((norm(p.outward) - 1.0).abs() < 1e-12);
+                let gap = shape.proximity(p.position, None).gap;
+                assert!(gap.abs() < 1e-12, "{}: gap {gap:e}", shape.describe());
+                let out = add(p.position, scale(p.outward, 1e-3));
+                assert!(shape.proximity(out, None).gap > 0.5e-3);
+            }
+            // Each point's nearest other point is within the spacing.
+            for p in &points {
+                let nearest = (points.iter())
+                    .filter(|q| *q != p)
+                    .map(|q| norm(crate::vec3::sub(q.position, p.position)))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(nearest <= spacing, "{}: {nearest}", shape.describe());
+            }
+            let diagonal_outward = points
+                .iter()
+                .filter(|p| {
+                    p.outward
+                        .iter()
+                        .all(|v| (v.abs() - 3f64.sqrt().recip()).abs() < 1e-12)
+                })
+                .count();
+            assert_eq!(diagonal_outward, corners, "{}", shape.describe());
+        }
+        // A rim of radius 0.09 in arcs of at most 1.3 cm: 44 points each.
+        assert_eq!(c.sharp_points(spacing).len(), 2 * 44);
+        // The plane and the sphere have none.
+        assert!(
+            PlaneObstacle::new([0.0; 3], [0.0, 0.0, 1.0])
+                .unwrap()
+                .sharp_points(spacing)
+                .is_empty()
+        );
+        assert!(
+            SphereObstacle::new([0.0; 3], 1.0)
+                .unwrap()
+                .sharp_points(spacing)
+                .is_empty()
+        );
     }
 
     #[test]

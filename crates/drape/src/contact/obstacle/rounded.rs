@@ -22,7 +22,7 @@
 //! the side, as a fabric hung over a real (never perfectly sharp) edge
 //! does; a node a fillet radius or more inside the edge rests on the top.
 
-use super::{Obstacle, Proximity};
+use super::{Obstacle, Proximity, SharpPoint};
 use crate::vec3::{add, scale};
 
 /// A sharp shape grown by a radius.
@@ -65,6 +65,18 @@ impl<O: Obstacle> Obstacle for Rounded<O> {
             self.inner.describe(),
             self.radius
         )
+    }
+
+    /// The inner shape's sharp points moved out by the radius along their
+    /// outward directions: the outermost points of the fillets, which a
+    /// fillet smaller than the fabric's elements pushes between nodes as a
+    /// sharp edge would.
+    fn sharp_points(&self, spacing: f64) -> Vec<SharpPoint> {
+        let mut points = self.inner.sharp_points(spacing);
+        for p in &mut points {
+            p.position = add(p.position, scale(p.outward, self.radius));
+        }
+        points
     }
 }
 

@@ -81,8 +81,8 @@ use std::path::Path;
 
 use super::bvh::Bvh;
 use super::{
-    Obstacle, ObstacleError, Proximity, TOUCH_TOLERANCE, ZERO3, diagonal, identity_minus,
-    plane_proximity, show_point,
+    Obstacle, ObstacleError, Proximity, SharpPoint, TOUCH_TOLERANCE, ZERO3, diagonal,
+    identity_minus, normalised, plane_proximity, sample_segment, show_point,
 };
 use crate::vec3::{add, cross, dot, norm, scale, sub};
 
@@ -655,7 +655,71 @@ impl Obstacle for TriMeshObstacle {
             show_point(self.hi)
         )
     }
+
+    /// The convex edges whose two faces turn by more than
+    /// [`SHARP_TURN_DEGREES`] (points inside them, outward the mean of the
+    /// two faces' normals) and the vertices at their ends (outward the
+    /// normalised sum of the distinct normals of the faces around them: a
+    /// box mesh's corners and edges are then a box's). An edge between
+    /// faces `t` and `u` running `a -> b` in `t` is convex where `(n_t x
+    /// n_u) . (b - a) > 0`. Flatter edges — a finely tessellated curve —
+    /// are left to node-to-surface contact.
+    fn sharp_points(&self, spacing: f64) -> Vec<SharpPoint> {
+        let sharp_cos = SHARP_TURN_DEGREES.to_radians().cos();
+        let mut out = Vec::new();
+        let mut corner = vec![false; self.vertices.len()];
+        for (t, tri) in self.triangles.iter().enumerate() {
+            let n_t = self.face_normals[t];
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                // Each edge once: its other face runs it b -> a.
+                if a > b {
+                    continue;
+                }
+                let n_u = sub(self.edge_normals[t][k], n_t);
+                let along = sub(self.vertices[b], self.vertices[a]);
+                if dot(cross(n_t, n_u), along) > 0.0 && dot(n_t, n_u) < sharp_cos {
+                    let outward = normalised(add(n_t, n_u));
+                    sample_segment(
+                        self.vertices[a],
+                        self.vertices[b],
+                        outward,
+                        spacing,
+                        &mut out,
+                    );
+                    corner[a] = true;
+                    corner[b] = true;
+                }
+            }
+        }
+        // The distinct face normals round each corner.
+        let mut normals: Vec<Vec<[f64; 3]>> = vec![Vec::new(); self.vertices.len()];
+        for (t, tri) in self.triangles.iter().enumerate() {
+            for &v in tri.iter().filter(|&&v| corner[v]) {
+                let n = self.face_normals[t];
+                if !normals[v].iter().any(|m| dot(*m, n) > 1.0 - 1e-12) {
+                    normals[v].push(n);
+                }
+            }
+        }
+        for (v, around) in normals.iter().enumerate() {
+            let sum = around.iter().fold([0.0; 3], |s, n| add(s, *n));
+            if corner[v] && norm(sum) > 1e-9 {
+                out.push(SharpPoint {
+                    position: self.vertices[v],
+                    outward: normalised(sum),
+                });
+            }
+        }
+        out
+    }
 }
+
+/// How far (degrees) a mesh obstacle's two faces must turn across a convex
+/// edge for the edge to be sharp ([`Obstacle::sharp_points`]): a fabric's
+/// chord across an edge turning by `theta` sags inside it by about `h
+/// theta / 4` (`h` the element size), 0.04 `h` at 10 degrees.
+pub const SHARP_TURN_DEGREES: f64 = 10.0;
 
 /// Reads a closed triangle mesh obstacle from a Wavefront OBJ (`.obj`,
 /// through [`crate::mesh::obj::read_obj`]) or STL (`.stl`, ASCII or binary,
@@ -930,6 +994,31 @@ mod tests {
             assert!((w - 1.0).abs() < 1e-6 || w.abs() < 1e-6, "{y:?}: w = {w}");
             assert_eq!(g < 0.0, w > 0.5, "{y:?}: g = {g}, w = {w}");
         }
+    }
+
+    /// A box mesh's sharp points are the box's (corners and edge points,
+    /// with their outward directions), whatever the order; a finely
+    /// tessellated sphere has none.
+    #[test]
+    fn box_mesh_has_the_boxs_sharp_points() {
+        let spacing = 0.013;
+        let mesh = obstacle(box_mesh(PEDESTAL_LO, PEDESTAL_HI)).sharp_points(spacing);
+        let sharp = BoxObstacle::new(PEDESTAL_LO, PEDESTAL_HI)
+            .unwrap()
+            .sharp_points(spacing);
+        assert_eq!(mesh.len(), sharp.len());
+        let close = |a: [f64; 3], b: [f64; 3]| norm(sub(a, b)) < 1e-12;
+        for p in &mesh {
+            assert!(
+                sharp
+                    .iter()
+                    .any(|q| close(p.position, q.position) && close(p.outward, q.outward)),
+                "{p:?}"
+            );
+        }
+        // Level 3: 1,280 faces, turning by about 5 degrees.
+        let round = obstacle(icosphere(3, [0.0; 3], 0.1));
+        assert!(round.sharp_points(spacing).is_empty());
     }
 
     #[test]

@@ -5,6 +5,7 @@
 //! through the one checker, `check_term` (a test helper).
 
 mod bending;
+mod features;
 mod friction;
 mod gas;
 mod inertia;
@@ -15,6 +16,7 @@ mod self_contact;
 mod self_friction;
 
 pub use bending::BendingTerm;
+pub use features::FeatureTerm;
 pub use friction::FrictionTerm;
 pub use gas::GasTerm;
 pub use inertia::InertiaTerm;
