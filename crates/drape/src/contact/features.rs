@@ -347,6 +347,33 @@ impl ObstacleFeatures {
         energy
     }
 
+    /// The work the moving obstacles do on the fabric through `pairs` over
+    /// a step of `dt` that ends at `y`, time `t` (J): each pair's `dC/dp .
+    /// v dt` at the step's end, `v` its obstacle's velocity (docs/theory.md
+    /// (1.8d)); 0 when no obstacle with features moves.
+    pub fn obstacle_work(
+        &self,
+        stiffness: f64,
+        pairs: &[FeaturePair],
+        (y, t, dt): (&[f64], f64, f64),
+    ) -> f64 {
+        if self.bodies.iter().all(|b| b.velocity == [0.0; 3]) {
+            return 0.0;
+        }
+        let mut work = 0.0;
+        for pair in pairs {
+            let depth = self.depth(pair, y, t);
+            if depth.is_nan() || depth <= 0.0 {
+                continue;
+            }
+            if let Some((_, ds, _)) = point_plane_squared_distance(&self.nodes(pair, y, t)) {
+                let v = self.bodies[pair.body].velocity;
+                work += 0.5 * stiffness * (0..3).map(|i| ds[i] * v[i] * dt).sum::<f64>();
+            }
+        }
+        work
+    }
+
     /// The deepest any feature point lies through the nearest triangle it
     /// projects into at `y`, time `t` (m; 0 when none does): what `[contact] features`
     /// keeps to the penalty's own scale.

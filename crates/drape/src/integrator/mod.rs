@@ -406,11 +406,10 @@ fn step_potential<'a>(
                 stiffness,
             )));
             if let Some(features) = model.obstacle_features() {
-                list.push(Box::new(FeatureTerm::new(
-                    features,
-                    model.pattern(),
-                    stiffness,
-                )));
+                let dt = terms.start.map_or(0.0, |(_, dt)| dt);
+                list.push(Box::new(
+                    FeatureTerm::new(features, model.pattern(), stiffness).over(dt),
+                ));
             }
         }
         // Friction lags the normal force and the tangent plane of the

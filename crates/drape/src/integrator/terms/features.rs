@@ -23,6 +23,11 @@ pub struct FeatureTerm<'a> {
     stiffness: f64,
     /// The step's pairs, found at its first guess ([`StepTerm::begin_step`]).
     pairs: Vec<FeaturePair>,
+    /// The step's size (s; 0 in a term without one): the moving
+    /// obstacles' work over the step.
+    dt: f64,
+    /// That work at the last evaluation (J).
+    worked: f64,
 }
 
 impl<'a> FeatureTerm<'a> {
@@ -34,7 +39,16 @@ impl<'a> FeatureTerm<'a> {
             pattern,
             stiffness,
             pairs: Vec::new(),
+            dt: 0.0,
+            worked: 0.0,
         }
+    }
+
+    /// The term over a step of `dt`: [`StepTerm::obstacle_work`] then
+    /// counts the moving obstacles' work through it.
+    pub fn over(mut self, dt: f64) -> Self {
+        self.dt = dt;
+        self
     }
 }
 
@@ -72,11 +86,22 @@ impl StepTerm for FeatureTerm<'_> {
                 project: ctx.project,
             }),
         );
+        self.worked = if self.dt > 0.0 {
+            let step = (y, ctx.time, self.dt);
+            self.features
+                .obstacle_work(self.stiffness, &self.pairs, step)
+        } else {
+            0.0
+        };
         TermValue {
             value,
             potential: true,
             scale: 0.0,
         }
+    }
+
+    fn obstacle_work(&self) -> f64 {
+        self.worked
     }
 }
 
@@ -97,10 +122,18 @@ mod tests {
     /// and the patch's nodes lifted into a gentle wave (so that the
     /// triangles' normals, and their derivatives, differ).
     fn patch_over_box(lift: f64) -> (crate::setup::Setup, Vec<f64>) {
+        patch_over_moving_box(lift, [0.0; 3])
+    }
+
+    /// [`patch_over_box`] with the box moving at `velocity` (m/s).
+    fn patch_over_moving_box(lift: f64, velocity: [f64; 3]) -> (crate::setup::Setup, Vec<f64>) {
         // Built clear of the box (a fabric may not start inside an
         // obstacle), then lowered onto it.
-        let contact = "[[obstacle]]\nshape = \"box\"\nmin = [-0.031, -0.037, -0.2]\nmax = [0.027, 0.033, -0.002]\n\
-             [contact]\nmethod = \"penalty\"\npenalty = 5.0e4\nfeatures = true";
+        let contact = format!(
+            "[[obstacle]]\nshape = \"box\"\nmin = [-0.031, -0.037, -0.2]\nmax = [0.027, 0.033, -0.002]\n\
+             velocity = {velocity:?}\n[contact]\nmethod = \"penalty\"\npenalty = 5.0e4\nfeatures = true"
+        );
+        let contact = contact.as_str();
         let setup = contact_patch(contact, 1e-3);
         let y = setup
             .model
@@ -134,6 +167,37 @@ mod tests {
         assert!(eg < 1e-6, "gradient {eg:e}");
         let (_, _, smallest) = check_projection(&mut term, &ctx, model.pattern(), &y);
         assert!(smallest > -1e-12, "projected {smallest:e}");
+    }
+
+    /// The work of a moving box through its features over a step of `dt`
+    /// (issue 46) is the energy's change as the box moves at fixed
+    /// positions, `dt dC/dt`, against central differences in time.
+    #[test]
+    fn a_moving_boxs_work_through_its_features_is_the_energys_time_derivative() {
+        let velocity = [0.3, -0.2, 0.1];
+        let (setup, y) = patch_over_moving_box(3e-3, velocity);
+        let model = &setup.model;
+        let features = model.obstacle_features().expect("a box has features");
+        let (t, dt, delta) = (0.0, 1e-3, 1e-6);
+        let ctx = StepContext {
+            time: t,
+            ..AT_START
+        };
+        let mut term = FeatureTerm::new(features, model.pattern(), 5.0e4).over(dt);
+        term.begin_step(&ctx, &y);
+        let mut g = vec![0.0; y.len()];
+        term.add(&ctx, &y, &mut g, None);
+        let work = term.obstacle_work();
+        let energy = |t: f64| features.add_penalty(5.0e4, &term.pairs, &y, t, &mut g.clone(), None);
+        let expected = dt * (energy(t + delta) - energy(t - delta)) / (2.0 * delta);
+        assert!(work.abs() > 1e-9, "work {work:e}");
+        assert!(
+            (work - expected).abs() < 1e-6 * expected.abs(),
+            "{work:e} against {expected:e}"
+        );
+        // A fixed box, or a term without a step, does no work.
+        let still = FeatureTerm::new(features, model.pattern(), 5.0e4);
+        assert_eq!(still.obstacle_work(), 0.0);
     }
 
     /// The same box 3 mm below the patch: its points have triangles near
