@@ -19,6 +19,17 @@
 //! sheet at rest, unstrained) stays its reference — the fine level starts
 //! unstrained where the coarse one was (no spurious energy). A quadratic
 //! surface is carried over exactly. The coarse nodes keep their values.
+//!
+//! **The rim.** A boundary edge has one triangle and no fit across it;
+//! its new node is put on the curve through the boundary nodes around it
+//! instead ([`rim_midpoints`]): the cubic through the edge's ends and the
+//! boundary nodes before and after them, in the chord length, at the
+//! edge's middle (the four-point rule, `(-1, 9, 9, -1) / 16` where the
+//! chords are equal), so that a disc's refined rim lies on its circle
+//! (to `O(h^4)`) rather than on the coarse polygon. A corner (the
+//! boundary turning by more than [`CORNER_DEGREES`]) is kept: the curve
+//! takes the neighbours on its smooth side only (a quadratic), or none
+//! (the chord's midpoint). A straight boundary stays straight.
 
 use crate::bending::{BendingError, edge_midpoints};
 use crate::mesh::Mesh;
@@ -61,11 +72,13 @@ impl Transfer {
     pub fn new(mesh: &Mesh, marked: &[bool], greens: &[Green]) -> Result<Self, TransferError> {
         let mut refinement = refine_again(mesh, marked, greens)?;
         let fits = edge_midpoints(mesh)?;
+        let rim = rim_midpoints(mesh);
         let rules: Vec<(Vec<usize>, Vec<f64>)> = refinement
             .midpoints
             .iter()
             .map(|&[a, b]| {
-                fits.get(&[a, b])
+                rim.get(&[a, b])
+                    .or_else(|| fits.get(&[a, b]))
                     .cloned()
                     .unwrap_or_else(|| (vec![a, b], vec![0.5, 0.5]))
             })
@@ -109,6 +122,85 @@ impl Transfer {
     }
 }
 
+/// The turn of the boundary (degrees) above which a boundary node is a
+/// corner that the rim's curve does not round.
+pub const CORNER_DEGREES: f64 = 30.0;
+
+/// For each boundary edge `[a, b]` (`a < b`) of the linear mesh `mesh`,
+/// the nodes and weights of its middle on the rim's curve (module docs):
+/// the Lagrange interpolant in the chord length through the boundary
+/// nodes `p, a, b, q` (those of a smooth side only at a corner), at half
+/// the edge. Weights sum to 1. Edges at a node where more than two
+/// boundary edges meet keep the chord.
+pub fn rim_midpoints(mesh: &Mesh) -> crate::bending::MidpointRules {
+    use std::collections::HashMap;
+    let key = |a: usize, b: usize| [a.min(b), a.max(b)];
+    let mut count: HashMap<[usize; 2], usize> = HashMap::new();
+    for t in mesh.elements() {
+        for m in 0..3 {
+            *count.entry(key(t[m], t[(m + 1) % 3])).or_default() += 1;
+        }
+    }
+    let mut along: HashMap<usize, Vec<usize>> = HashMap::new();
+    let mut edges: Vec<[usize; 2]> = count
+        .iter()
+        .filter(|&(_, &n)| n == 1)
+        .map(|(&e, _)| e)
+        .collect();
+    edges.sort_unstable();
+    for &[a, b] in &edges {
+        along.entry(a).or_default().push(b);
+        along.entry(b).or_default().push(a);
+    }
+    let x = |k: usize| mesh.nodes[k];
+    let dist = |a: usize, b: usize| {
+        let (p, q) = (x(a), x(b));
+        ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+    };
+    // The boundary node before `a` (going away from `b`), if the boundary
+    // runs on smoothly through `a`.
+    let before = |a: usize, b: usize| -> Option<usize> {
+        let next = along.get(&a)?;
+        let [u, v] = next.as_slice() else {
+            return None;
+        };
+        let p = if *u == b { *v } else { *u };
+        let (pa, ab) = (
+            std::array::from_fn::<f64, 3, _>(|i| x(a)[i] - x(p)[i]),
+            std::array::from_fn::<f64, 3, _>(|i| x(b)[i] - x(a)[i]),
+        );
+        let cos = (pa[0] * ab[0] + pa[1] * ab[1] + pa[2] * ab[2]) / (dist(p, a) * dist(a, b));
+        (cos >= CORNER_DEGREES.to_radians().cos()).then_some(p)
+    };
+    let mut rules = crate::bending::MidpointRules::new();
+    for &[a, b] in &edges {
+        let h = dist(a, b);
+        let mut nodes = Vec::with_capacity(4);
+        let mut at = Vec::with_capacity(4);
+        if let Some(p) = before(a, b) {
+            nodes.push(p);
+            at.push(-dist(p, a));
+        }
+        nodes.extend([a, b]);
+        at.extend([0.0, h]);
+        if let Some(q) = before(b, a) {
+            nodes.push(q);
+            at.push(h + dist(b, q));
+        }
+        let middle = 0.5 * h;
+        let weights: Vec<f64> = (0..nodes.len())
+            .map(|i| {
+                (0..nodes.len())
+                    .filter(|&j| j != i)
+                    .map(|j| (middle - at[j]) / (at[i] - at[j]))
+                    .product()
+            })
+            .collect();
+        rules.insert([a, b], (nodes, weights));
+    }
+    rules
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -116,6 +208,63 @@ mod tests {
 
     fn flat(mesh: &Mesh) -> Vec<f64> {
         mesh.nodes.iter().flatten().copied().collect()
+    }
+
+    /// The rim: a disc's new boundary nodes lie on its circle (within
+    /// 1e-4 of the chord's sag off it at 6 rings) and its refined area is
+    /// nearer the circle's; a rectangle's stay on its straight sides, and
+    /// its corners are not rounded (its area is kept to round-off).
+    #[test]
+    fn new_rim_nodes_lie_on_the_rim() {
+        let disc = generate::disc(0.15, 6, [0.0; 3], ElementOrder::Linear);
+        let all = vec![true; disc.element_count()];
+        let t = Transfer::new(&disc, &all, &[]).unwrap();
+        let rim = disc.boundary_nodes();
+        let on_rim = |a: usize| rim.binary_search(&a).is_ok();
+        let mut checked = 0;
+        for (j, &[a, b]) in t.refinement.midpoints.iter().enumerate() {
+            if !(on_rim(a) && on_rim(b)) {
+                continue;
+            }
+            let p = t.refinement.mesh.nodes[disc.node_count() + j];
+            let r = (p[0] * p[0] + p[1] * p[1]).sqrt();
+            let (pa, pb) = (disc.nodes[a], disc.nodes[b]);
+            let chord = (0.25 * ((pa[0] + pb[0]).powi(2) + (pa[1] + pb[1]).powi(2))).sqrt();
+            let sag = 0.15 - chord;
+            assert!(
+                (r - 0.15).abs() < 1e-4 * 0.15 && (r - 0.15).abs() < 0.05 * sag,
+                "{r} (sag {sag})"
+            );
+            checked += 1;
+        }
+        assert_eq!(checked, 36);
+        let area = |m: &Mesh| -> f64 {
+            m.elements()
+                .map(|t| {
+                    let [a, b, c] = [t[0], t[1], t[2]].map(|v| m.nodes[v]);
+                    0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+                })
+                .sum()
+        };
+        let circle = std::f64::consts::PI * 0.15 * 0.15;
+        let (coarse, fine) = (area(&disc), area(&t.refinement.mesh));
+        assert!(
+            (circle - fine).abs() < 0.3 * (circle - coarse),
+            "{coarse} → {fine} ({circle})"
+        );
+        let rect = generate::rectangle(
+            [0.3, 0.2],
+            [3, 2],
+            generate::Pattern::Right,
+            [0.0; 3],
+            ElementOrder::Linear,
+        );
+        let t = Transfer::new(&rect, &vec![true; rect.element_count()], &[]).unwrap();
+        assert!((area(&t.refinement.mesh) - 0.06).abs() < 1e-15);
+        for p in &t.refinement.mesh.nodes {
+            let inside = p[0].abs() <= 0.15 + 1e-15 && p[1].abs() <= 0.1 + 1e-15;
+            assert!(inside, "{p:?} off the rectangle");
+        }
     }
 
     /// On a curved reference the new nodes lie on the surface — a tenth of
