@@ -290,7 +290,9 @@ impl ObstacleFeatures {
 
     /// Adds `C = sum 1/2 eta g^2` over the pairs `pairs` with `g < 0` at
     /// `y`, time `t`, to `g` and (if given) its Hessian to `h` (module
-    /// docs); returns `C` (J).
+    /// docs); returns `C` (J) and `dC/dt` at fixed `y` (W): the power the
+    /// moving obstacles put in through their points, `sum dC/dp . v`
+    /// (docs/theory.md (1.8d)).
     pub fn add_penalty(
         &self,
         stiffness: f64,
@@ -299,8 +301,8 @@ impl ObstacleFeatures {
         t: f64,
         g: &mut [f64],
         mut h: Option<PenaltyHessian>,
-    ) -> f64 {
-        let mut energy = 0.0;
+    ) -> (f64, f64) {
+        let (mut energy, mut power) = (0.0, 0.0);
         for pair in pairs {
             // Not through the plane (or not finite): no energy.
             let depth = self.depth(pair, y, t);
@@ -312,6 +314,7 @@ impl ObstacleFeatures {
             };
             let tri = self.triangles[pair.triangle];
             energy += 0.5 * stiffness * s;
+            power += 0.5 * stiffness * dot(self.bodies[pair.body].velocity, [ds[0], ds[1], ds[2]]);
             for (a, &node) in tri.iter().enumerate() {
                 for i in 0..3 {
                     g[3 * node + i] += 0.5 * stiffness * ds[3 + 3 * a + i];
@@ -344,34 +347,7 @@ impl ObstacleFeatures {
                 }
             }
         }
-        energy
-    }
-
-    /// The work the moving obstacles do on the fabric through `pairs` over
-    /// a step of `dt` that ends at `y`, time `t` (J): each pair's `dC/dp .
-    /// v dt` at the step's end, `v` its obstacle's velocity (docs/theory.md
-    /// (1.8d)); 0 when no obstacle with features moves.
-    pub fn obstacle_work(
-        &self,
-        stiffness: f64,
-        pairs: &[FeaturePair],
-        (y, t, dt): (&[f64], f64, f64),
-    ) -> f64 {
-        if self.bodies.iter().all(|b| b.velocity == [0.0; 3]) {
-            return 0.0;
-        }
-        let mut work = 0.0;
-        for pair in pairs {
-            let depth = self.depth(pair, y, t);
-            if depth.is_nan() || depth <= 0.0 {
-                continue;
-            }
-            if let Some((_, ds, _)) = point_plane_squared_distance(&self.nodes(pair, y, t)) {
-                let v = self.bodies[pair.body].velocity;
-                work += 0.5 * stiffness * (0..3).map(|i| ds[i] * v[i] * dt).sum::<f64>();
-            }
-        }
-        work
+        (energy, power)
     }
 
     /// The deepest any feature point lies through the nearest triangle it

@@ -446,6 +446,7 @@ fn features_energy(model: &crate::model::Model, y: &[f64]) -> f64 {
         (Some(f), Some(crate::contact::ContactMethod::Penalty { stiffness })) => {
             let pairs = f.pairs(y, 0.0);
             f.add_penalty(stiffness, &pairs, y, 0.0, &mut vec![0.0; y.len()], None)
+                .0
         }
         _ => 0.0,
     }

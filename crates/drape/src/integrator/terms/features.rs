@@ -74,7 +74,7 @@ impl StepTerm for FeatureTerm<'_> {
         g: &mut [f64],
         h: Option<&mut [f64]>,
     ) -> TermValue {
-        let value = self.features.add_penalty(
+        let (value, power) = self.features.add_penalty(
             self.stiffness,
             &self.pairs,
             y,
@@ -86,13 +86,7 @@ impl StepTerm for FeatureTerm<'_> {
                 project: ctx.project,
             }),
         );
-        self.worked = if self.dt > 0.0 {
-            let step = (y, ctx.time, self.dt);
-            self.features
-                .obstacle_work(self.stiffness, &self.pairs, step)
-        } else {
-            0.0
-        };
+        self.worked = power * self.dt;
         TermValue {
             value,
             potential: true,
@@ -188,7 +182,11 @@ mod tests {
         let mut g = vec![0.0; y.len()];
         term.add(&ctx, &y, &mut g, None);
         let work = term.obstacle_work();
-        let energy = |t: f64| features.add_penalty(5.0e4, &term.pairs, &y, t, &mut g.clone(), None);
+        let energy = |t: f64| {
+            features
+                .add_penalty(5.0e4, &term.pairs, &y, t, &mut g.clone(), None)
+                .0
+        };
         let expected = dt * (energy(t + delta) - energy(t - delta)) / (2.0 * delta);
         assert!(work.abs() > 1e-9, "work {work:e}");
         assert!(
