@@ -133,21 +133,8 @@ pub const CORNER_DEGREES: f64 = 30.0;
 /// the edge. Weights sum to 1. Edges at a node where more than two
 /// boundary edges meet keep the chord.
 pub fn rim_midpoints(mesh: &Mesh) -> crate::bending::MidpointRules {
-    use std::collections::HashMap;
-    let key = |a: usize, b: usize| [a.min(b), a.max(b)];
-    let mut count: HashMap<[usize; 2], usize> = HashMap::new();
-    for t in mesh.elements() {
-        for m in 0..3 {
-            *count.entry(key(t[m], t[(m + 1) % 3])).or_default() += 1;
-        }
-    }
-    let mut along: HashMap<usize, Vec<usize>> = HashMap::new();
-    let mut edges: Vec<[usize; 2]> = count
-        .iter()
-        .filter(|&(_, &n)| n == 1)
-        .map(|(&e, _)| e)
-        .collect();
-    edges.sort_unstable();
+    let edges = mesh.boundary_edges();
+    let mut along: std::collections::HashMap<usize, Vec<usize>> = Default::default();
     for &[a, b] in &edges {
         along.entry(a).or_default().push(b);
         along.entry(b).or_default().push(a);

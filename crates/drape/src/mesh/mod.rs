@@ -174,14 +174,7 @@ impl Mesh {
     /// including the high-order nodes on those edges.
     pub fn boundary_nodes(&self) -> Vec<usize> {
         let p = self.order.degree();
-        let mut count: std::collections::HashMap<(usize, usize), usize> =
-            std::collections::HashMap::new();
-        for el in self.elements() {
-            for k in 0..3 {
-                let (a, b) = (el[k], el[(k + 1) % 3]);
-                *count.entry((a.min(b), a.max(b))).or_insert(0) += 1;
-            }
-        }
+        let count = self.edge_counts();
         let mut on_boundary = vec![false; self.nodes.len()];
         for el in self.elements() {
             for k in 0..3 {
@@ -196,6 +189,29 @@ impl Mesh {
             }
         }
         (0..self.nodes.len()).filter(|&i| on_boundary[i]).collect()
+    }
+
+    /// The free edges (those of one element only) by their corner nodes
+    /// `[a, b]`, `a < b`, sorted.
+    pub fn boundary_edges(&self) -> Vec<[usize; 2]> {
+        let mut edges: Vec<[usize; 2]> = (self.edge_counts().into_iter())
+            .filter(|&(_, n)| n == 1)
+            .map(|((a, b), _)| [a, b])
+            .collect();
+        edges.sort_unstable();
+        edges
+    }
+
+    /// How many elements each edge `(a, b)` (corner nodes, `a < b`) has.
+    fn edge_counts(&self) -> std::collections::HashMap<(usize, usize), usize> {
+        let mut count = std::collections::HashMap::new();
+        for el in self.elements() {
+            for k in 0..3 {
+                let (a, b) = (el[k], el[(k + 1) % 3]);
+                *count.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            }
+        }
+        count
     }
 
     /// Axis-aligned bounding box `(min, max)` of the initial positions.
