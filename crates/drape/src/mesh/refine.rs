@@ -122,7 +122,7 @@ pub fn refine_again(
         .iter()
         .map(|g| g.halves.iter().any(|&h| marked[h]))
         .collect();
-    let (triangles, origin, red, split) = loop {
+    let (triangles, origin, red, mut split) = loop {
         let (triangles, origin, mut red, presplit) = working(&elements, marked, greens, &undone);
         let split = closure(&triangles, &mut red, presplit);
         let mut reached = false;
@@ -136,7 +136,6 @@ pub fn refine_again(
             break (triangles, origin, red, split);
         }
     };
-    let mut split = split;
     // New nodes in the order of the elements and their edges (a result
     // that depends on the mesh alone).
     let mut nodes = mesh.nodes.clone();
