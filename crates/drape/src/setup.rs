@@ -122,6 +122,8 @@ pub struct Refine {
     pub tolerance: f64,
     /// Dörfler's bulk share of the curvature indicator, in (0, 1].
     pub fraction: f64,
+    /// What the marking ranks the triangles by.
+    pub indicator: crate::scenario::RefineIndicator,
 }
 
 /// `[time] adaptive = true`: the settings of the [`StepController`](crate::simulation::schedule::StepController).

@@ -281,5 +281,15 @@ fn bad_refine_keys_are_refused_by_name() {
         message.contains("everywhere") && message.contains("all"),
         "{message}"
     );
+    let message = common::build(
+        &format!("{base}\n[refine]\nindicator = \"sag\"\n"),
+        Path::new("test.toml"),
+    )
+    .unwrap_err();
+    assert!(
+        message.contains("sag") && message.contains("bending") && message.contains("chord"),
+        "{message}"
+    );
     let _ = setup(&format!("{base}\n[refine]\nlevels = 3\nwhere = \"all\"\n"));
+    let _ = setup(&format!("{base}\n[refine]\nindicator = \"chord\"\n"));
 }

@@ -32,7 +32,7 @@ pub mod transfer;
 
 use crate::integrator::State;
 use crate::measure::{DrapeTester, Given, Surface, measure};
-use crate::scenario::Scenario;
+use crate::scenario::{RefineIndicator, Scenario};
 use crate::setup::{Analysis, Setup};
 use crate::simulation::{
     self, Checkpoint, LevelRecord, LevelStart, Levels, RunControl, RunError, StepInfo, Summary,
@@ -164,7 +164,10 @@ pub fn run_with(
         let flags = if plan.uniform {
             vec![true; model.mesh().element_count()]
         } else {
-            let eta = indicator::curvature_indicator(model.mesh(), &finished.state.positions);
+            let mut eta = indicator::curvature_indicator(model.mesh(), &finished.state.positions);
+            if plan.indicator == RefineIndicator::Chord {
+                indicator::times_area(model.mesh(), &mut eta);
+            }
             indicator::dorfler(&eta, plan.fraction)
         };
         let transfer = Transfer::new(model.mesh(), &flags, &greens)

@@ -251,6 +251,7 @@ fn build_refine(c: &Checker, s: &Scenario, mesh: &Mesh) -> Result<Option<Refine>
         uniform: r.region == RefineWhere::All,
         tolerance: r.tolerance,
         fraction: r.fraction,
+        indicator: r.indicator,
     }))
 }
 

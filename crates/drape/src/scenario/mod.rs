@@ -668,6 +668,12 @@ pub struct RefineSpec {
     /// (0, 1]; default 0.7.
     #[serde(default = "default_fraction")]
     pub fraction: f64,
+    /// `"folds"`: what the marking ranks the triangles by (default
+    /// `"bending"`, the curvature's energy; `"chord"`, that energy times
+    /// the triangle's area: the flat triangles' distance from the curved
+    /// surface).
+    #[serde(default)]
+    pub indicator: RefineIndicator,
 }
 
 pub use crate::setup::MAX_REFINE_LEVELS;
@@ -681,6 +687,22 @@ pub enum RefineWhere {
     /// Where the folds are (the curvature indicator), closed conformingly.
     #[default]
     Folds,
+}
+
+/// `[refine] indicator`: what Dörfler's marking ranks the triangles by
+/// ([`crate::levels::indicator`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RefineIndicator {
+    /// The discrete shell's bending energy of each triangle: where the
+    /// folds are, however fine the mesh already is there.
+    #[default]
+    Bending,
+    /// That energy times the triangle's reference area, the square of
+    /// how far the flat triangle lies from the curved surface: it falls
+    /// fourfold where a triangle is split, so each level refines where
+    /// the mesh resolves the curvature worst.
+    Chord,
 }
 
 fn default_levels() -> usize {
