@@ -323,6 +323,7 @@ impl StepEnergies {
 }
 
 /// What a step adds to the membrane: its time, inertia and loads.
+#[derive(Clone, Copy)]
 pub(crate) struct StepTerms<'a> {
     /// `1 / (beta dt^2)`, or 0 in statics (no inertia).
     pub c: f64,

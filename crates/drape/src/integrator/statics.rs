@@ -26,12 +26,48 @@
 //! none at all in the first. A load friction cannot hold has no static
 //! equilibrium: the round fails, and with it the increment, which the
 //! run reports as friction's ([`FrictionShortfall`]).
+//!
+//! **Relaxation in pseudo-time.** Where the loading path buckles (a
+//! skirt folding under its weight), the equilibrium the increment
+//! starts from turns unstable, and the one it must reach lies across a
+//! bifurcation, further than Newton's line search carries it: the
+//! increment fails however small it is cut (a 60-ring drape tester's
+//! failed at a thirteenth of its weight with increments cut to 1/1280).
+//! An increment that fails once it is halved ([`StaticStepper::relax`])
+//! is therefore solved again by pseudo-transient continuation (Kelley &
+//! Keyes 1998, "Convergence analysis of pseudo-transient continuation",
+//! SIAM J. Numer. Anal. 35): a sequence of pseudo-steps, each minimising
+//!
+//! ```text
+//! Pi(Y) + 1 / (2 tau_k^2) (Y - Y_k) . M (Y - Y_k)
+//! ```
+//!
+//! from `Y_k`, the last pseudo-step's solution — a backward-Euler step of
+//! size `tau_k` from rest, the fabric's own mass `M` the metric. Each is a
+//! proximal step: it lowers `Pi` and stays near `Y_k`, so it goes down
+//! the unstable direction instead of stalling on it, and the sequence
+//! ends at a minimum of `Pi` (a stable equilibrium) as a damped fall to
+//! rest would, without its oscillations. `tau` starts at `sqrt(h / a)`,
+//! the time a node takes to fall one mean edge `h` under the load's
+//! acceleration `a`, grows by the static residual's decrease (switched
+//! evolution relaxation: `tau_{k+1} = tau_k |R_{k-1}| / |R_k|`, between
+//! 1/2 and 4 times), and is quartered where a pseudo-step fails. The
+//! static residual of a pseudo-step's solution is its inertia force
+//! `R_k = M (Y_{k+1} - Y_k) / tau_k^2` off the supports; the increment
+//! ends where it is within Newton's residual tolerance of the external
+//! forces. As `tau` grows the pseudo-steps become Newton's, and converge
+//! as fast. Only increments without friction are relaxed (friction's
+//! rounds lag a normal force the pseudo-steps would move).
 
 use super::terms::{FrictionTerm, SelfFrictionTerm};
-use super::{FrictionLag, State, StepTerms, end_gas_steps, gas_steps, merge_reports, solve_step};
+use super::{
+    FrictionLag, State, StepEnergies, StepTerms, end_gas_steps, gas_steps, merge_reports,
+    solve_step,
+};
 use crate::integrator::newmark::{DynamicWorkspace, FrictionShortfall, StepOutcome};
 use crate::model::Model;
-use crate::solver::newton::{NewtonError, NewtonSettings};
+use crate::solver::newton::{NewtonError, NewtonReport, NewtonSettings};
+use crate::vecn::norm;
 
 /// The change of the lagged normal forces `mu lambda` between two rounds,
 /// summed over the nodes, relative to their sum, below which a static
@@ -52,6 +88,10 @@ pub struct StaticStepper {
     /// (0, but on a finer level of a multilevel settle:
     /// [`crate::setup::Analysis::Static`]).
     pub from: f64,
+    /// Whether an increment Newton cannot solve is relaxed in
+    /// pseudo-time (module docs): the run asks it of an increment already
+    /// halved, whose halving did not help.
+    pub relax: bool,
 }
 
 impl StaticStepper {
@@ -104,7 +144,8 @@ impl StaticStepper {
                 friction,
                 gas: &gas,
             };
-            let solved = solve_step(
+            let solved = solve_increment(
+                self.relax && !rounds,
                 model,
                 terms,
                 &mut state.contact,
@@ -160,6 +201,155 @@ impl StaticStepper {
             newton: total.unwrap_or_else(super::empty_report),
             energies,
         })
+    }
+}
+
+/// Most pseudo-steps of one relaxed increment.
+const RELAX_STEPS: usize = 400;
+/// The factor on `tau` after a pseudo-step that failed.
+const RELAX_SHRINK: f64 = 0.25;
+/// The bounds on `tau`'s factor after a pseudo-step that converged.
+const RELAX_GROWTH: (f64, f64) = (0.5, 4.0);
+/// Newton iterations within which a pseudo-step counts as easy: the next
+/// is at least twice as long.
+const RELAX_EASY: usize = 4;
+/// The shortest `tau`, relative to the first, before relaxing gives up.
+const RELAX_SHORTEST: f64 = 1e-6;
+
+/// Solves the static increment `base` (its inertia unset) from `y` by
+/// Newton, and where that fails and `relax` is set, by pseudo-transient
+/// continuation from `y` (module docs); the arguments otherwise
+/// [`solve_step`]'s. Returns the Newton iterations of every attempt and
+/// the last one's energies.
+#[allow(clippy::too_many_arguments)]
+fn solve_increment(
+    relax: bool,
+    model: &Model,
+    base: StepTerms,
+    contact: &mut Option<crate::contact::ContactState>,
+    y: &mut [f64],
+    length: f64,
+    settings: &NewtonSettings,
+    newton: &mut crate::solver::newton::NewtonWorkspace,
+    f_ext: &mut [f64],
+    old_ext: &[f64],
+    my: &mut [f64],
+    grown: &mut Option<super::grown::Grown>,
+) -> Result<(NewtonReport, StepEnergies), NewtonError> {
+    let n = y.len();
+    let mut anchor = y.to_vec();
+    let (mut q, mut mq) = (vec![0.0; n], vec![0.0; n]);
+    // The plain increment first (no inertia: `tau` infinite).
+    let (mut tau, mut first) = (f64::INFINITY, f64::INFINITY);
+    let mut total: Option<NewtonReport> = None;
+    let (mut previous, mut scale) = (None::<f64>, 0.0f64);
+    let mut last = (f64::INFINITY, f64::INFINITY);
+    for _ in 0..RELAX_STEPS {
+        let c = if tau.is_finite() {
+            1.0 / (tau * tau)
+        } else {
+            0.0
+        };
+        if c > 0.0 {
+            for (qi, a) in q.iter_mut().zip(&anchor) {
+                *qi = c * a;
+            }
+            model.mass_times(&q, &mut mq);
+        }
+        y.copy_from_slice(&anchor);
+        let terms = StepTerms {
+            c,
+            q: &q,
+            mq: &mq,
+            ..base
+        };
+        let solved = solve_step(
+            model, terms, contact, y, length, settings, newton, f_ext, old_ext, my, grown,
+        );
+        match solved {
+            Err(e @ NewtonError::Interrupted { .. }) => return Err(e),
+            Err(e) if tau.is_infinite() && !relax => return Err(e),
+            Err(_) if tau.is_infinite() => {
+                first = pseudo_time(model, base.dead);
+                tau = first;
+            }
+            Ok(solved) if tau.is_infinite() => return Ok(solved),
+            Err(e) => {
+                tau *= RELAX_SHRINK;
+                if tau < RELAX_SHORTEST * first {
+                    return Err(e);
+                }
+            }
+            Ok((report, energies)) => {
+                let iterations = report.iterations;
+                total = Some(merge_reports(total, report));
+                // The static residual: the pseudo-step's inertia force
+                // off the supports.
+                for ((d, yi), a) in q.iter_mut().zip(y.iter()).zip(&anchor) {
+                    *d = yi - a;
+                }
+                model.mass_times(&q, &mut mq);
+                let residual = c * mq
+                    .iter()
+                    .zip(model.fixed())
+                    .filter(|(_, held)| !**held)
+                    .map(|(f, _)| f * f)
+                    .sum::<f64>()
+                    .sqrt();
+                if previous.is_none() {
+                    scale = norm(f_ext).max(residual);
+                }
+                last = (residual, norm(&q) / length);
+                anchor.copy_from_slice(y);
+                if residual <= settings.residual_tolerance * scale {
+                    let report = total.unwrap_or_else(super::empty_report);
+                    return Ok((report, energies));
+                }
+                // A pseudo-step Newton solved at once may be longer,
+                // whatever the residual did (a fold creeping across
+                // lowers it slowly).
+                let easy = if iterations <= RELAX_EASY { 2.0 } else { 0.0 };
+                let growth = previous.map_or(RELAX_GROWTH.1, |p| p / residual).max(easy);
+                tau *= growth.clamp(RELAX_GROWTH.0, RELAX_GROWTH.1);
+                previous = Some(residual);
+            }
+        }
+    }
+    y.copy_from_slice(&anchor);
+    Err(NewtonError::NotConverged {
+        iterations: total.map_or(0, |t| t.iterations),
+        residual: last.0,
+        increment: last.1,
+    })
+}
+
+/// The first pseudo-step's `tau` (s): `sqrt(h / a)`, the time a node
+/// takes to fall the mesh's mean edge `h` from rest under the load's
+/// acceleration `a` (the dead loads' nodal magnitudes over the mass); 10 ms
+/// without dead loads.
+fn pseudo_time(model: &Model, dead: &[f64]) -> f64 {
+    let mesh = model.mesh();
+    let (mut edges, mut count) = (0.0, 0usize);
+    for t in mesh.elements() {
+        for m in 0..3 {
+            let (a, b) = (mesh.nodes[t[m]], mesh.nodes[t[(m + 1) % 3]]);
+            edges += crate::vec3::norm(crate::vec3::sub(b, a));
+            count += 1;
+        }
+    }
+    let ones = vec![1.0; dead.len()];
+    let mut m1 = vec![0.0; dead.len()];
+    model.mass_times(&ones, &mut m1);
+    let mass: f64 = m1.iter().step_by(3).sum();
+    let load: f64 = dead
+        .chunks_exact(3)
+        .map(|f| (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt())
+        .sum();
+    let h = edges / count.max(1) as f64;
+    if load > 0.0 && mass > 0.0 && h > 0.0 {
+        (h * mass / load).sqrt()
+    } else {
+        1e-2
     }
 }
 

@@ -674,7 +674,7 @@ impl Stepper<'_, '_> {
                 let mut pending: Vec<(f64, usize)> =
                     if progressed { resumed } else { vec![(*dt, 0)] };
                 while let Some((h, depth)) = pending.pop() {
-                    match self.attempt(h) {
+                    match self.attempt(h, depth) {
                         Ok(outcome) => {
                             progressed = true;
                             if let Some(end) = self.record(&outcome, h, depth, k)? {
@@ -714,7 +714,7 @@ impl Stepper<'_, '_> {
     /// records the controller's segment and step size.
     fn adaptive(&mut self, mut controller: StepController) -> Result<End, RunError> {
         while let Some(h) = controller.next_step(self.state.time) {
-            match self.attempt(h) {
+            match self.attempt(h, 0) {
                 Ok(outcome) => {
                     let halvings = controller.converged(outcome.newton.iterations);
                     self.counters.segment = controller.segment();
@@ -740,13 +740,20 @@ impl Stepper<'_, '_> {
         Ok(End::Done)
     }
 
-    fn attempt(&mut self, h: f64) -> Result<StepOutcome, NewtonError> {
+    /// One step of size `h`, the `depth`-th halving of its scheduled one.
+    fn attempt(&mut self, h: f64, depth: usize) -> Result<StepOutcome, NewtonError> {
         // A stop asked for between two steps (the observer's) ends the run
         // before the next, whatever the watcher has seen yet.
         if self.stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
             return Err(NewtonError::Interrupted { iteration: 0 });
         }
-        advance(self.setup, &mut self.state, h, self.length, self.ws)
+        advance(
+            self.setup,
+            &mut self.state,
+            (h, depth),
+            self.length,
+            self.ws,
+        )
     }
 
     /// Books a converged step of size `h` that needed `cutbacks` halvings:
@@ -1125,10 +1132,14 @@ fn static_hint(model: &Model, shortfall: Option<FrictionShortfall>) -> String {
     "; a static analysis needs a membrane in tension from the first increment on (prestress, or supports that stretch it): a slack membrane has no stiffness across its plane, so run it dynamically to rest instead (beta = 1, gamma = 1.5)".into()
 }
 
+/// The static increments that [`StaticStepper::relax`]es: those halved
+/// at least this often (a halving that did not help).
+const RELAX_DEPTH: usize = 1;
+
 fn advance(
     setup: &Setup,
     state: &mut State,
-    h: f64,
+    (h, depth): (f64, usize),
     length: f64,
     ws: &mut DynamicWorkspace,
 ) -> Result<StepOutcome, NewtonError> {
@@ -1137,7 +1148,15 @@ fn advance(
             newmark.step(&setup.model, state, h, &setup.newton, length, ws)
         }
         Analysis::Static { from, .. } => {
-            StaticStepper { from: *from }.step(&setup.model, state, h, &setup.newton, length, ws)
+            let relax = depth >= RELAX_DEPTH;
+            StaticStepper { from: *from, relax }.step(
+                &setup.model,
+                state,
+                h,
+                &setup.newton,
+                length,
+                ws,
+            )
         }
     }
 }
