@@ -213,6 +213,9 @@ const RELAX_GROWTH: (f64, f64) = (0.5, 4.0);
 /// Newton iterations within which a pseudo-step counts as easy: the next
 /// is at least twice as long.
 const RELAX_EASY: usize = 4;
+/// The most Newton iterations of one pseudo-step (fewer where
+/// `[solver] max_iterations` says): a longer one is cut.
+const RELAX_ITERATIONS: usize = 30;
 /// The shortest `tau`, relative to the first, before relaxing gives up.
 const RELAX_SHORTEST: f64 = 1e-6;
 
@@ -263,6 +266,13 @@ fn solve_increment(
             mq: &mq,
             ..base
         };
+        // A pseudo-step is meant to be easy: one Newton cannot solve in
+        // a few iterations is made shorter rather than pursued.
+        let pseudo = NewtonSettings {
+            max_iterations: settings.max_iterations.min(RELAX_ITERATIONS),
+            ..*settings
+        };
+        let settings = if c > 0.0 { &pseudo } else { settings };
         let solved = solve_step(
             model, terms, contact, y, length, settings, newton, f_ext, old_ext, my, grown,
         );
