@@ -124,6 +124,10 @@ pub struct Refine {
     pub fraction: f64,
     /// What the marking ranks the triangles by.
     pub indicator: crate::scenario::RefineIndicator,
+    /// Split the triangles on the free boundary too.
+    pub rim: bool,
+    /// Split the triangles across the contact line too.
+    pub contact_line: bool,
 }
 
 /// `[time] adaptive = true`: the settings of the [`StepController`](crate::simulation::schedule::StepController).

@@ -239,6 +239,28 @@ fn a_multilevel_settle_resumes_across_a_refinement_bit_for_bit() {
     assert_eq!(dcs(&summary), dcs(&resumed));
 }
 
+/// `also`: with a Dörfler share that marks almost nothing, `"rim"` still
+/// splits every edge of the 8-ring disc's rim (48 new nodes at least),
+/// and `"contact"` the triangles across the pedestal's edge.
+#[test]
+fn the_rim_and_the_contact_line_are_refined_when_asked() {
+    let added = |also: &str| {
+        let text = tester().replace(
+            "levels = 2\ntolerance = 0.0",
+            &format!("levels = 1\ntolerance = 0.0\nfraction = 0.001\nalso = [{also}]"),
+        );
+        let dir = temp_dir("levels-also");
+        let summary = run_levels(&text, &dir, RunControl::default(), &mut |_| {}).unwrap();
+        summary.levels[1].nodes - summary.levels[0].nodes
+    };
+    let (none, rim, contact) = (added(""), added("\"rim\""), added("\"contact\""));
+    assert!(none < 48, "{none}");
+    assert!(rim >= 48 + none, "{rim} against {none}");
+    // The pedestal's edge (r = 9 cm) crosses rings 4 and 5 of 8: at
+    // least 24 edges of the triangles across it are split.
+    assert!(contact >= 24 + none, "{contact} against {none}");
+}
+
 /// Each key out of its range, and a mesh of order 2, refused by name.
 #[test]
 fn bad_refine_keys_are_refused_by_name() {
@@ -272,24 +294,21 @@ fn bad_refine_keys_are_refused_by_name() {
         message.contains("refine.levels") && message.contains("linear triangles"),
         "{message}"
     );
-    let message = common::build(
-        &format!("{base}\n[refine]\nwhere = \"everywhere\"\n"),
-        Path::new("test.toml"),
-    )
-    .unwrap_err();
-    assert!(
-        message.contains("everywhere") && message.contains("all"),
-        "{message}"
-    );
-    let message = common::build(
-        &format!("{base}\n[refine]\nindicator = \"sag\"\n"),
-        Path::new("test.toml"),
-    )
-    .unwrap_err();
-    assert!(
-        message.contains("sag") && message.contains("bending") && message.contains("chord"),
-        "{message}"
-    );
+    // A value not among a choice's: the message names it and the choices.
+    let refused = |extra: &str, words: &[&str]| {
+        let message = common::build(
+            &format!("{base}\n[refine]\n{extra}\n"),
+            Path::new("test.toml"),
+        )
+        .unwrap_err();
+        assert!(words.iter().all(|w| message.contains(w)), "{message}");
+    };
+    refused("where = \"everywhere\"", &["everywhere", "all"]);
+    refused("indicator = \"sag\"", &["sag", "bending", "chord"]);
+    refused("also = [\"rim\", \"hem\"]", &["hem", "rim", "contact"]);
     let _ = setup(&format!("{base}\n[refine]\nlevels = 3\nwhere = \"all\"\n"));
     let _ = setup(&format!("{base}\n[refine]\nindicator = \"chord\"\n"));
+    let _ = setup(&format!(
+        "{base}\n[refine]\nalso = [\"rim\", \"contact\"]\n"
+    ));
 }

@@ -98,6 +98,32 @@ pub fn times_area(mesh: &Mesh, eta: &mut [f64]) {
     }
 }
 
+/// Sets `flags[e]` for every triangle `e` of the linear mesh `mesh` with
+/// an edge on its free boundary (`[refine] also = ["rim"]`).
+pub fn mark_rim(mesh: &Mesh, flags: &mut [bool]) {
+    let rim: std::collections::HashSet<[usize; 2]> = mesh.boundary_edges().into_iter().collect();
+    for (e, t) in mesh.elements().enumerate() {
+        for m in 0..3 {
+            let (a, b) = (t[m], t[(m + 1) % 3]);
+            if rim.contains(&[a.min(b), a.max(b)]) {
+                flags[e] = true;
+            }
+        }
+    }
+}
+
+/// Sets `flags[e]` for every triangle `e` of the linear mesh `mesh` whose
+/// corners are some `touching` and some not: the contact line
+/// (`[refine] also = ["contact"]`).
+pub fn mark_across(mesh: &Mesh, touching: &[bool], flags: &mut [bool]) {
+    for (e, t) in mesh.elements().enumerate() {
+        let n = t[..3].iter().filter(|&&a| touching[a]).count();
+        if n > 0 && n < 3 {
+            flags[e] = true;
+        }
+    }
+}
+
 /// Dörfler's marking: the fewest elements, largest `eta` first (ties by
 /// index), whose `eta` sum to at least `fraction` of the total; every
 /// element where the total is zero (nothing to tell them apart) or
@@ -130,18 +156,23 @@ mod tests {
         mesh.nodes.iter().flatten().copied().collect()
     }
 
-    /// A flat sheet holds nothing; a sheet folded along a line holds it
-    /// all on the triangles that have an edge on the fold, as much on each
-    /// side, and the closed form.
-    #[test]
-    fn a_fold_holds_the_indicator() {
-        let mesh = generate::rectangle(
+    /// The unit square in 4 x 4 squares of two triangles, from (0, 0).
+    fn square() -> Mesh {
+        generate::rectangle(
             [1.0, 1.0],
             [4, 4],
             generate::Pattern::Right,
             [0.5, 0.5, 0.0],
             crate::mesh::ElementOrder::Linear,
-        );
+        )
+    }
+
+    /// A flat sheet holds nothing; a sheet folded along a line holds it
+    /// all on the triangles that have an edge on the fold, as much on each
+    /// side, and the closed form.
+    #[test]
+    fn a_fold_holds_the_indicator() {
+        let mesh = square();
         let y = flat(&mesh);
         assert!(curvature_indicator(&mesh, &y).iter().all(|&e| e == 0.0));
         // Fold about the line x = 0.5 by 90 degrees: z = |x - 0.5|.
@@ -216,6 +247,38 @@ mod tests {
             (fine.1 / coarse.1 - 0.25).abs() < 0.025,
             "{coarse:?} {fine:?}"
         );
+    }
+
+    /// The rim's triangles are those with a boundary edge; the contact
+    /// line's those with corners on both sides of it.
+    #[test]
+    fn rim_and_contact_line_are_marked() {
+        let mesh = square();
+        let mut flags = vec![false; mesh.element_count()];
+        mark_rim(&mesh, &mut flags);
+        let on_rim = |e: usize| {
+            let t = &mesh.connectivity[3 * e..3 * e + 3];
+            let side = |c: usize, v: f64| t.iter().filter(|&&a| mesh.nodes[a][c] == v).count() == 2;
+            side(0, 0.0) || side(0, 1.0) || side(1, 0.0) || side(1, 1.0)
+        };
+        for (e, &f) in flags.iter().enumerate() {
+            assert_eq!(f, on_rim(e), "element {e}");
+        }
+        // 4 x 4 squares of two triangles: 16 boundary edges, of 14
+        // triangles (two corner triangles hold two each).
+        assert_eq!(flags.iter().filter(|&&f| f).count(), 14);
+        // The nodes at x = 0 and 0.25 touch, those from x = 0.5 on do
+        // not: the second column of squares' triangles are across.
+        let touching: Vec<bool> = mesh.nodes.iter().map(|p| p[0] < 0.3).collect();
+        let mut flags = vec![false; mesh.element_count()];
+        mark_across(&mesh, &touching, &mut flags);
+        for (e, &f) in flags.iter().enumerate() {
+            let t = &mesh.connectivity[3 * e..3 * e + 3];
+            let xs: Vec<f64> = t.iter().map(|&a| mesh.nodes[a][0]).collect();
+            let across = xs.contains(&0.25) && xs.contains(&0.5);
+            assert_eq!(f, across, "element {e}: {xs:?}");
+        }
+        assert_eq!(flags.iter().filter(|&&f| f).count(), 8);
     }
 
     /// Dörfler marks the largest first until the share is reached, ties by

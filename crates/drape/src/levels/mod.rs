@@ -168,7 +168,15 @@ pub fn run_with(
             if plan.indicator == RefineIndicator::Chord {
                 indicator::times_area(model.mesh(), &mut eta);
             }
-            indicator::dorfler(&eta, plan.fraction)
+            let mut flags = indicator::dorfler(&eta, plan.fraction);
+            if plan.rim {
+                indicator::mark_rim(model.mesh(), &mut flags);
+            }
+            if plan.contact_line {
+                let touching = touching(model, &finished.state);
+                indicator::mark_across(model.mesh(), &touching, &mut flags);
+            }
+            flags
         };
         let transfer = Transfer::new(model.mesh(), &flags, &greens)
             .map_err(|e| refine_error(out, k + 1, e.to_string()))?;
@@ -195,6 +203,21 @@ pub fn run_with(
             written: finished.written,
         });
         level = Some(next);
+    }
+}
+
+/// Whether each node of `model`'s mesh touches an obstacle in `state`:
+/// an obstacle's force on it (none without obstacles).
+fn touching(model: &crate::model::Model, state: &State) -> Vec<bool> {
+    let nodes = model.mesh().node_count();
+    match (model.contact(), state.contact.as_ref()) {
+        (Some(contact), Some(cs)) => contact
+            .report(&state.positions, state.time, cs)
+            .nodal_forces
+            .iter()
+            .map(|f| f.iter().any(|v| *v != 0.0))
+            .collect(),
+        _ => vec![false; nodes],
     }
 }
 

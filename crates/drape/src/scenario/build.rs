@@ -8,7 +8,7 @@ use super::material::{build_bending, build_material};
 use super::specimen::{make_wavy, specimen_of};
 use super::{
     AnalysisKind, BoxSpec, Component, FixSpec, LoadKindSpec, LoadSpec, MAX_REFINE_LEVELS,
-    MeshShape, MeshSpec, MonitorSpec, RefineWhere, Scenario, ScenarioError, SolverSpec,
+    MeshShape, MeshSpec, MonitorSpec, RefineAlso, RefineWhere, Scenario, ScenarioError, SolverSpec,
 };
 use crate::bending::BendingError;
 use crate::input::{InputFile, fnv1a};
@@ -252,6 +252,8 @@ fn build_refine(c: &Checker, s: &Scenario, mesh: &Mesh) -> Result<Option<Refine>
         tolerance: r.tolerance,
         fraction: r.fraction,
         indicator: r.indicator,
+        rim: r.also.contains(&RefineAlso::Rim),
+        contact_line: r.also.contains(&RefineAlso::Contact),
     }))
 }
 

@@ -674,6 +674,25 @@ pub struct RefineSpec {
     /// surface).
     #[serde(default)]
     pub indicator: RefineIndicator,
+    /// `"folds"`: regions split besides the marked triangles: `"rim"`
+    /// (every triangle with an edge on the free boundary) and
+    /// `"contact"` (every triangle with corners both touching an obstacle
+    /// and not: the contact line). Default none.
+    #[serde(default)]
+    pub also: Vec<RefineAlso>,
+}
+
+/// `[refine] also`: a region split on every finer level whatever the
+/// indicator says.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RefineAlso {
+    /// The triangles with an edge on the free boundary: the specimen's
+    /// outline, which the drape coefficient's shadow is.
+    Rim,
+    /// The triangles across the contact line: some corners pressed on an
+    /// obstacle, some not.
+    Contact,
 }
 
 pub use crate::setup::MAX_REFINE_LEVELS;
