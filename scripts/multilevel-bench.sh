@@ -4,7 +4,9 @@
 # quasi-statically (centre held, weight in 20 static increments) — once
 # uniformly on 60 rings (crates/drape-bench/scenarios/quasi-static-60.toml,
 # 21,600 T3) and once on 15 rings refined twice along the folds
-# (multilevel-15-folds.toml) — side by side in one run of this script.
+# (multilevel-15-folds.toml), and four times along the folds, the rim and
+# the contact line (multilevel-15-folds-rim.toml) — side by side in one
+# run of this script.
 # Prints each run's wall time, Newton iterations and drape coefficient,
 # the multilevel run's level-to-level changes, its distance to the
 # uniform value and the wall-time ratio (the issue asks within 0.01, at
@@ -51,17 +53,23 @@ json.dump({"dc": levels[-1].get("drape_coefficient"), "wall": s["wall_seconds"]}
           open(f"{out}.result", "w"))
 PY
 }
+labels="multilevel multilevel-rim"
 run multilevel "$scenarios/multilevel-15-folds.toml"
+run multilevel-rim "$scenarios/multilevel-15-folds-rim.toml"
 for extra in ${EXTRA:-}; do
   run "$(basename "$extra" .toml)" "$extra"
+  labels="$labels $(basename "$extra" .toml)"
 done
 if [ "${UNIFORM:-1}" = 1 ]; then
   run uniform-60 "$scenarios/quasi-static-60.toml"
-  python3 - "$work/multilevel.result" "$work/uniform-60.result" <<'PY'
+  python3 - "$work" $labels <<'PY'
 import json, sys
-m, u = (json.load(open(p)) for p in sys.argv[1:3])
-print(f"multilevel against uniform 60 rings: DC {m['dc']:.4f} against {u['dc']:.4f} "
-      f"(difference {m['dc'] - u['dc']:+.4f}), wall {m['wall']:.1f} s against {u['wall']:.1f} s "
-      f"(ratio {m['wall'] / u['wall']:.3f})")
+work, labels = sys.argv[1], sys.argv[2:]
+u = json.load(open(f"{work}/uniform-60.result"))
+for label in labels:
+    m = json.load(open(f"{work}/{label}.result"))
+    print(f"{label} against uniform 60 rings: DC {m['dc']:.4f} against {u['dc']:.4f} "
+          f"(difference {m['dc'] - u['dc']:+.4f}), wall {m['wall']:.1f} s against {u['wall']:.1f} s "
+          f"(ratio {m['wall'] / u['wall']:.3f})")
 PY
 fi
