@@ -307,7 +307,13 @@ fn solve_increment(
                     .sum::<f64>()
                     .sqrt();
                 if previous.is_none() {
-                    scale = norm(f_ext).max(residual);
+                    // The loads' size; without loads (an increment
+                    // driven by its supports or obstacles alone), the
+                    // first pseudo-step's residual.
+                    scale = norm(f_ext);
+                    if scale == 0.0 {
+                        scale = residual;
+                    }
                 }
                 last = (residual, norm(&q) / length);
                 anchor.copy_from_slice(y);
