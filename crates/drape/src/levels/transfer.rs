@@ -32,8 +32,8 @@
 //! (the chord's midpoint). A straight boundary stays straight.
 
 use crate::bending::{BendingError, edge_midpoints};
-use crate::mesh::Mesh;
-use crate::mesh::refine::{Green, RefineError, Refinement, refine_again};
+use crate::mesh::refine::{Green, RefineError, Refinement, refine_again, refine_lagrange};
+use crate::mesh::{ElementOrder, Mesh};
 
 /// Why a mesh cannot be refined.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -45,6 +45,11 @@ pub enum TransferError {
     /// The edges' fits (an edge of more than two triangles).
     #[error("{0}")]
     Fit(#[from] BendingError),
+    /// A mesh of higher order refined where marked, not everywhere.
+    #[error(
+        "refinement along the folds splits linear triangles; a mesh of order {0} is refined everywhere (where = \"all\")"
+    )]
+    Adaptive(usize),
 }
 
 /// A refinement with its new nodes on the surface, and the rule that
@@ -64,12 +69,25 @@ impl Transfer {
     /// `mesh` (linear) refined red where `marked`, closed green, the green
     /// splits `greens` of the refinement that made it undone where reached
     /// ([`refine_again`]; none for a coarse mesh), each new node placed on
-    /// its edge's quadratic over the reference positions.
+    /// its edge's quadratic over the reference positions. A mesh of order
+    /// 2 or 3 is refined everywhere ([`refine_lagrange`]: every flag set),
+    /// each new node by its parent element's own interpolation.
     ///
     /// # Errors
     /// [`TransferError`]: a mesh of higher order, flags that do not match,
     /// a non-manifold edge.
     pub fn new(mesh: &Mesh, marked: &[bool], greens: &[Green]) -> Result<Self, TransferError> {
+        if mesh.order != ElementOrder::Linear {
+            if marked.len() != mesh.element_count() || marked.iter().any(|m| !m) {
+                return Err(TransferError::Adaptive(mesh.order.degree()));
+            }
+            let (refinement, rules) = refine_lagrange(mesh)?;
+            return Ok(Self {
+                refinement,
+                coarse: mesh.node_count(),
+                rules,
+            });
+        }
         let mut refinement = refine_again(mesh, marked, greens)?;
         let fits = edge_midpoints(mesh)?;
         let rim = rim_midpoints(mesh);
@@ -344,6 +362,78 @@ mod tests {
             for i in 0..3 {
                 assert!((carried[3 * k + i] - want[i]).abs() < 1e-12, "node {k}");
             }
+        }
+    }
+
+    /// A mesh of order 2 or 3 is split everywhere, each triangle into four
+    /// of its order: the refined rectangle tiles the coarse one (area,
+    /// boundary edges doubled), every fine node is used, and a field
+    /// polynomial of the order is carried onto the new nodes exactly; a
+    /// partial marking is refused.
+    #[test]
+    fn lagrange_meshes_are_refined_by_their_own_interpolation() {
+        for order in [ElementOrder::Quadratic, ElementOrder::Cubic] {
+            let mesh = generate::rectangle(
+                [0.4, 0.3],
+                [4, 3],
+                generate::Pattern::Alternate,
+                [0.0; 3],
+                order,
+            );
+            let all = vec![true; mesh.element_count()];
+            let t = Transfer::new(&mesh, &all, &[]).unwrap();
+            let fine = &t.refinement.mesh;
+            assert_eq!(fine.order, order);
+            assert_eq!(fine.element_count(), 4 * mesh.element_count());
+            let corner_area = |m: &Mesh| -> f64 {
+                m.elements()
+                    .map(|e| {
+                        let [a, b, c] = [e[0], e[1], e[2]].map(|v| m.nodes[v]);
+                        0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+                    })
+                    .sum()
+            };
+            assert!(
+                (corner_area(fine) - 0.12).abs() < 1e-14,
+                "{}",
+                corner_area(fine)
+            );
+            assert_eq!(fine.boundary_edges().len(), 2 * mesh.boundary_edges().len());
+            let mut used = vec![false; fine.node_count()];
+            for &a in &fine.connectivity {
+                used[a] = true;
+            }
+            assert!(used.iter().all(|&u| u), "{order:?}");
+            // A polynomial of the order, in the plane's coordinates.
+            let f = |x: [f64; 3]| {
+                let (u, v) = (x[0], x[1]);
+                let q = 1.0 + 2.0 * u - v + 3.0 * u * v - u * u + 0.5 * v * v;
+                let c = if order == ElementOrder::Cubic {
+                    u * u * v - 2.0 * v * v * v + u * u * u
+                } else {
+                    0.0
+                };
+                [q + c, q - c, 0.25 * q]
+            };
+            let coarse: Vec<f64> = mesh.nodes.iter().flat_map(|&x| f(x)).collect();
+            let carried = t.carry(&coarse);
+            for (a, &x) in fine.nodes.iter().enumerate() {
+                let want = f(x);
+                for i in 0..3 {
+                    let got = carried[3 * a + i];
+                    assert!(
+                        (got - want[i]).abs() < 1e-12,
+                        "{order:?} node {a}: {got} {}",
+                        want[i]
+                    );
+                }
+            }
+            let mut some = all.clone();
+            some[0] = false;
+            assert!(matches!(
+                Transfer::new(&mesh, &some, &[]),
+                Err(TransferError::Adaptive(_))
+            ));
         }
     }
 }

@@ -215,6 +215,126 @@ pub fn refine_again(
     })
 }
 
+/// Each triangle of a Lagrange mesh of order 2 or 3 split red into four,
+/// every triangle (no closure is needed): the children's corners are the
+/// parent's corners and its edges' midpoints in the parent's reference
+/// coordinates, and each child's nodes are those of its order on it. A
+/// node that is one of the parent's keeps its number; every other is
+/// new, placed by the parent's own interpolation: with the rule (the
+/// parent's nodes, the weights `phi^a(xi)`, summing to 1) that
+/// [`crate::levels::Transfer`] carries a field by. A node on a coarse
+/// edge depends on that edge's nodes alone, so the two triangles beside
+/// it give it the same place, and it is made once. The refined mesh
+/// represents each coarse element's field exactly (a polynomial of the
+/// order on each child): a carried state has the coarse state's
+/// energy.
+///
+/// Returns the refinement (`midpoints` empty: the new nodes are not
+/// edge midpoints; no greens) and each new node's rule.
+///
+/// # Errors
+/// [`RefineError::Order`] for a linear mesh (split by [`refine`]).
+pub fn refine_lagrange(mesh: &Mesh) -> Result<(Refinement, Vec<Rule>), RefineError> {
+    if mesh.order == ElementOrder::Linear {
+        return Err(RefineError::Order(1));
+    }
+    let basis = super::lagrange::ShapeFunctions::new(mesh.order);
+    let local = super::lagrange::reference_nodes(mesh.order);
+    let p = mesh.order.degree();
+    // Reference points of the children's nodes are multiples of 1 / (2p).
+    let scale = (2 * p) as f64;
+    let grid = |xi: [f64; 2]| {
+        [
+            (xi[0] * scale).round() as i64,
+            (xi[1] * scale).round() as i64,
+        ]
+    };
+    let children: [[[f64; 2]; 3]; 4] = [
+        [[0.0, 0.0], [0.5, 0.0], [0.0, 0.5]],
+        [[0.5, 0.0], [1.0, 0.0], [0.5, 0.5]],
+        [[0.0, 0.5], [0.5, 0.5], [0.0, 1.0]],
+        [[0.5, 0.0], [0.5, 0.5], [0.0, 0.5]],
+    ];
+    let mut nodes = mesh.nodes.clone();
+    let mut rules: Vec<Rule> = Vec::new();
+    let mut on_edges: HashMap<(usize, usize, i64), usize> = HashMap::new();
+    let mut connectivity = Vec::with_capacity(4 * mesh.connectivity.len());
+    let mut parent = Vec::with_capacity(4 * mesh.element_count());
+    for (e, element) in mesh.elements().enumerate() {
+        let at: HashMap<[i64; 2], usize> = local
+            .iter()
+            .zip(element)
+            .map(|(xi, &a)| (grid(*xi), a))
+            .collect();
+        let corners = [element[0], element[1], element[2]];
+        let mut inside: HashMap<[i64; 2], usize> = HashMap::new();
+        for child in &children {
+            for xi in &local {
+                let x = std::array::from_fn(|i| {
+                    child[0][i]
+                        + xi[0] * (child[1][i] - child[0][i])
+                        + xi[1] * (child[2][i] - child[0][i])
+                });
+                let key = grid(x);
+                let node = if let Some(&a) = at.get(&key) {
+                    a
+                } else {
+                    // Barycentric coordinates (in units of 1 / 2p): on an
+                    // edge where one is zero.
+                    let l = [2 * p as i64 - key[0] - key[1], key[0], key[1]];
+                    let edge = (0..3).find(|&k| l[k] == 0).map(|k| {
+                        let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+                        let (a, b) = (corners[i], corners[j]);
+                        // The distance from the smaller end, in 1 / 2p.
+                        if a < b { (a, b, l[j]) } else { (b, a, l[i]) }
+                    });
+                    let known = match edge {
+                        Some(k) => on_edges.get(&k).copied(),
+                        None => inside.get(&key).copied(),
+                    };
+                    known.unwrap_or_else(|| {
+                        let (phi, _) = basis.evaluate(x);
+                        let weights = phi[..element.len()].to_vec();
+                        let new = nodes.len();
+                        nodes.push(std::array::from_fn(|i| {
+                            element
+                                .iter()
+                                .zip(&weights)
+                                .map(|(&a, w)| w * mesh.nodes[a][i])
+                                .sum()
+                        }));
+                        rules.push((element.to_vec(), weights));
+                        match edge {
+                            Some(k) => on_edges.insert(k, new),
+                            None => inside.insert(key, new),
+                        };
+                        new
+                    })
+                };
+                connectivity.push(node);
+            }
+            parent.push(e);
+        }
+    }
+    let refinement = Refinement {
+        mesh: Mesh {
+            nodes,
+            order: mesh.order,
+            connectivity,
+        },
+        midpoints: Vec::new(),
+        parent,
+        red: mesh.element_count(),
+        green: 0,
+        greens: Vec::new(),
+    };
+    Ok((refinement, rules))
+}
+
+/// A new node's place as a combination of coarse nodes: their numbers and
+/// weights (summing to 1).
+pub type Rule = (Vec<usize>, Vec<f64>);
+
 /// The edge `a`–`b` as a key, its ends in order.
 fn key(a: usize, b: usize) -> (usize, usize) {
     (a.min(b), a.max(b))

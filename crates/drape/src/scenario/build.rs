@@ -235,13 +235,13 @@ fn build_refine(c: &Checker, s: &Scenario, mesh: &Mesh) -> Result<Option<Refine>
             ),
         ));
     }
-    if mesh.order != ElementOrder::Linear {
+    if mesh.order != ElementOrder::Linear && r.region != RefineWhere::All {
         return Err(c.invalid(
             t,
             None,
-            "levels",
+            "where",
             format!(
-                "refinement splits linear triangles, and this mesh has order {} (mesh.order): refine a linear mesh",
+                "refinement along the folds splits linear triangles, and this mesh has order {} (mesh.order): refine it everywhere (where = \"all\"), or refine a linear mesh along the folds",
                 mesh.order.degree()
             ),
         ));
