@@ -122,8 +122,9 @@ pub struct Refine {
     pub tolerance: f64,
     /// Dörfler's bulk share of the curvature indicator, in (0, 1].
     pub fraction: f64,
-    /// What the marking ranks the triangles by.
-    pub indicator: crate::scenario::RefineIndicator,
+    /// The marking ranks the triangles by the chord indicator (the
+    /// bending indicator times the area), not the bending indicator.
+    pub chord: bool,
     /// Split the triangles on the free boundary too.
     pub rim: bool,
     /// Split the triangles across the contact line too.

@@ -32,7 +32,7 @@ pub mod transfer;
 
 use crate::integrator::State;
 use crate::measure::{DrapeTester, Given, Surface, measure};
-use crate::scenario::{RefineIndicator, Scenario};
+use crate::scenario::Scenario;
 use crate::setup::{Analysis, Setup};
 use crate::simulation::{
     self, Checkpoint, LevelRecord, LevelStart, Levels, RunControl, RunError, StepInfo, Summary,
@@ -165,7 +165,7 @@ pub fn run_with(
             vec![true; model.mesh().element_count()]
         } else {
             let mut eta = indicator::curvature_indicator(model.mesh(), &finished.state.positions);
-            if plan.indicator == RefineIndicator::Chord {
+            if plan.chord {
                 indicator::times_area(model.mesh(), &mut eta);
             }
             let mut flags = indicator::dorfler(&eta, plan.fraction);

@@ -8,7 +8,8 @@ use super::material::{build_bending, build_material};
 use super::specimen::{make_wavy, specimen_of};
 use super::{
     AnalysisKind, BoxSpec, Component, FixSpec, LoadKindSpec, LoadSpec, MAX_REFINE_LEVELS,
-    MeshShape, MeshSpec, MonitorSpec, RefineAlso, RefineWhere, Scenario, ScenarioError, SolverSpec,
+    MeshShape, MeshSpec, MonitorSpec, RefineAlso, RefineIndicator, RefineWhere, Scenario,
+    ScenarioError, SolverSpec,
 };
 use crate::bending::BendingError;
 use crate::input::{InputFile, fnv1a};
@@ -251,7 +252,7 @@ fn build_refine(c: &Checker, s: &Scenario, mesh: &Mesh) -> Result<Option<Refine>
         uniform: r.region == RefineWhere::All,
         tolerance: r.tolerance,
         fraction: r.fraction,
-        indicator: r.indicator,
+        chord: r.indicator == RefineIndicator::Chord,
         rim: r.also.contains(&RefineAlso::Rim),
         contact_line: r.also.contains(&RefineAlso::Contact),
     }))
