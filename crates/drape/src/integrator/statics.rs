@@ -32,7 +32,7 @@
 //! starts from turns unstable, and the one it must reach lies across a
 //! bifurcation, further than Newton's line search carries it: the
 //! increment fails however small it is cut (a 60-ring drape tester's
-//! failed at a thirteenth of its weight with increments cut to 1/1280).
+//! failed at a third of its weight with increments cut to 1/1280).
 //! An increment that fails once it is halved ([`StaticStepper::relax`])
 //! is therefore solved again by pseudo-transient continuation (Kelley &
 //! Keyes 1998, "Convergence analysis of pseudo-transient continuation",
