@@ -353,8 +353,19 @@ fn check(path: &Path) -> Result<(), Failure> {
         let region = if r.uniform {
             "every triangle".to_string()
         } else {
+            let measure = if r.chord {
+                "the curvature times the area (the sag)"
+            } else {
+                "the curvature"
+            };
+            let also = match (r.rim, r.contact_line) {
+                (true, true) => ", and the rim and the contact line",
+                (true, false) => ", and the rim",
+                (false, true) => ", and the contact line",
+                (false, false) => "",
+            };
             format!(
-                "along the folds (the triangles holding {} of the curvature)",
+                "along the folds (the triangles holding {} of {measure}){also}",
                 r.fraction
             )
         };

@@ -44,6 +44,18 @@ fn a_multilevel_run_is_the_same_on_one_thread_and_two_and_measures_renders_and_p
         checked.contains("refine    up to 2 levels, along the folds"),
         "{checked}"
     );
+    // The marking's choices are said too.
+    let chosen = dir.join("chosen.toml");
+    let text = std::fs::read_to_string(scenario).unwrap().replace(
+        "[refine]",
+        "[refine]\nindicator = \"chord\"\nalso = [\"rim\", \"contact\"]",
+    );
+    std::fs::write(&chosen, text).unwrap();
+    let checked = drape(&["check", chosen.to_str().unwrap()], 2);
+    assert!(
+        checked.contains("times the area (the sag)), and the rim and the contact line"),
+        "{checked}"
+    );
     let mut histories = Vec::new();
     for threads in [1, 2] {
         let out = dir.join(format!("out-{threads}"));
