@@ -148,7 +148,7 @@ impl StaticStepper {
                 self.relax && !rounds,
                 model,
                 terms,
-                &mut state.contact,
+                (&state.positions, &mut state.contact),
                 &mut ws.y,
                 length,
                 settings,
@@ -221,15 +221,15 @@ const RELAX_SHORTEST: f64 = 1e-6;
 
 /// Solves the static increment `base` (its inertia unset) from `y` by
 /// Newton, and where that fails and `relax` is set, by pseudo-transient
-/// continuation from `y` (module docs); the arguments otherwise
-/// [`solve_step`]'s. Returns the Newton iterations of every attempt and
-/// the last one's energies.
+/// continuation from the increment's `start` (module docs); the
+/// arguments otherwise [`solve_step`]'s. Returns the Newton iterations of
+/// the pseudo-steps (or of the plain solve) and the last one's energies.
 #[allow(clippy::too_many_arguments)]
 fn solve_increment(
     relax: bool,
     model: &Model,
     base: StepTerms,
-    contact: &mut Option<crate::contact::ContactState>,
+    (start, contact): (&[f64], &mut Option<crate::contact::ContactState>),
     y: &mut [f64],
     length: f64,
     settings: &NewtonSettings,
@@ -239,10 +239,9 @@ fn solve_increment(
     my: &mut [f64],
     grown: &mut Option<super::grown::Grown>,
 ) -> Result<(NewtonReport, StepEnergies), NewtonError> {
-    let n = y.len();
-    let mut anchor = y.to_vec();
-    let (mut q, mut mq) = (vec![0.0; n], vec![0.0; n]);
-    // The plain increment first (no inertia: `tau` infinite).
+    // The plain increment first (no inertia: `tau` infinite); the
+    // pseudo-steps' buffers are made when they start.
+    let (mut anchor, mut q, mut mq) = (Vec::new(), Vec::new(), Vec::new());
     let (mut tau, mut first) = (f64::INFINITY, f64::INFINITY);
     let mut total: Option<NewtonReport> = None;
     let (mut previous, mut scale) = (None::<f64>, 0.0f64);
@@ -253,18 +252,20 @@ fn solve_increment(
         } else {
             0.0
         };
-        if c > 0.0 {
+        let terms = if c > 0.0 {
             for (qi, a) in q.iter_mut().zip(&anchor) {
                 *qi = c * a;
             }
             model.mass_times(&q, &mut mq);
-        }
-        y.copy_from_slice(&anchor);
-        let terms = StepTerms {
-            c,
-            q: &q,
-            mq: &mq,
-            ..base
+            y.copy_from_slice(&anchor);
+            StepTerms {
+                c,
+                q: &q,
+                mq: &mq,
+                ..base
+            }
+        } else {
+            base
         };
         // A pseudo-step is meant to be easy: one Newton cannot solve in
         // a few iterations is made shorter rather than pursued.
@@ -280,6 +281,8 @@ fn solve_increment(
             Err(e @ NewtonError::Interrupted { .. }) => return Err(e),
             Err(e) if tau.is_infinite() && !relax => return Err(e),
             Err(_) if tau.is_infinite() => {
+                anchor = start.to_vec();
+                (q, mq) = (vec![0.0; start.len()], vec![0.0; start.len()]);
                 first = pseudo_time(model, base.dead);
                 tau = first;
             }
@@ -331,7 +334,6 @@ fn solve_increment(
             }
         }
     }
-    y.copy_from_slice(&anchor);
     Err(NewtonError::NotConverged {
         iterations: total.map_or(0, |t| t.iterations),
         residual: last.0,

@@ -46,10 +46,7 @@ use std::collections::HashMap;
 pub fn curvature_indicator(mesh: &Mesh, y: &[f64]) -> Vec<f64> {
     let at = |a: usize| [y[3 * a], y[3 * a + 1], y[3 * a + 2]];
     let triangles: Vec<[usize; 3]> = mesh.elements().map(|t| [t[0], t[1], t[2]]).collect();
-    let area = |t: &[usize; 3]| {
-        let [a, b, c] = t.map(|v| mesh.nodes[v]);
-        0.5 * norm(cross(sub(b, a), sub(c, a)))
-    };
+    let area = |t: &[usize; 3]| reference_area(mesh, *t);
     let normal = |t: &[usize; 3]| {
         let [a, b, c] = t.map(at);
         let n = cross(sub(b, a), sub(c, a));
@@ -93,9 +90,14 @@ pub fn curvature_indicator(mesh: &Mesh, y: &[f64]) -> Vec<f64> {
 /// triangle's reference area: the chord indicator of the module docs.
 pub fn times_area(mesh: &Mesh, eta: &mut [f64]) {
     for (e, t) in mesh.elements().enumerate() {
-        let [a, b, c] = [t[0], t[1], t[2]].map(|v| mesh.nodes[v]);
-        eta[e] *= 0.5 * norm(cross(sub(b, a), sub(c, a)));
+        eta[e] *= reference_area(mesh, [t[0], t[1], t[2]]);
     }
+}
+
+/// The reference area of the triangle with corners `t` of `mesh`.
+fn reference_area(mesh: &Mesh, t: [usize; 3]) -> f64 {
+    let [a, b, c] = t.map(|v| mesh.nodes[v]);
+    0.5 * norm(cross(sub(b, a), sub(c, a)))
 }
 
 /// Sets `flags[e]` for every triangle `e` of the linear mesh `mesh` with

@@ -39,7 +39,8 @@ pub struct Refinement {
     /// new midpoints.
     pub mesh: Mesh,
     /// For each new node (`coarse node count + k`), the coarse edge it
-    /// halves.
+    /// halves (a linear refinement; empty for [`refine_lagrange`], whose
+    /// new nodes are not midpoints).
     pub midpoints: Vec<[usize; 2]>,
     /// For each triangle of the refined mesh, its coarse element.
     pub parent: Vec<usize>,
@@ -260,14 +261,13 @@ pub fn refine_lagrange(mesh: &Mesh) -> Result<(Refinement, Vec<Rule>), RefineErr
     let mut on_edges: HashMap<(usize, usize, i64), usize> = HashMap::new();
     let mut connectivity = Vec::with_capacity(4 * mesh.connectivity.len());
     let mut parent = Vec::with_capacity(4 * mesh.element_count());
+    // The parent's nodes on the grid, and its new interior nodes (a few
+    // per triangle: a short list, searched).
+    let at: Vec<[i64; 2]> = local.iter().map(|xi| grid(*xi)).collect();
+    let mut inside: Vec<([i64; 2], usize)> = Vec::new();
     for (e, element) in mesh.elements().enumerate() {
-        let at: HashMap<[i64; 2], usize> = local
-            .iter()
-            .zip(element)
-            .map(|(xi, &a)| (grid(*xi), a))
-            .collect();
         let corners = [element[0], element[1], element[2]];
-        let mut inside: HashMap<[i64; 2], usize> = HashMap::new();
+        inside.clear();
         for child in &children {
             for xi in &local {
                 let x = std::array::from_fn(|i| {
@@ -276,8 +276,8 @@ pub fn refine_lagrange(mesh: &Mesh) -> Result<(Refinement, Vec<Rule>), RefineErr
                         + xi[1] * (child[2][i] - child[0][i])
                 });
                 let key = grid(x);
-                let node = if let Some(&a) = at.get(&key) {
-                    a
+                let node = if let Some(k) = at.iter().position(|&g| g == key) {
+                    element[k]
                 } else {
                     // Barycentric coordinates (in units of 1 / 2p): on an
                     // edge where one is zero.
@@ -290,7 +290,7 @@ pub fn refine_lagrange(mesh: &Mesh) -> Result<(Refinement, Vec<Rule>), RefineErr
                     });
                     let known = match edge {
                         Some(k) => on_edges.get(&k).copied(),
-                        None => inside.get(&key).copied(),
+                        None => inside.iter().find(|(g, _)| *g == key).map(|&(_, a)| a),
                     };
                     known.unwrap_or_else(|| {
                         let (phi, _) = basis.evaluate(x);
@@ -304,10 +304,11 @@ pub fn refine_lagrange(mesh: &Mesh) -> Result<(Refinement, Vec<Rule>), RefineErr
                                 .sum()
                         }));
                         rules.push((element.to_vec(), weights));
-                        match edge {
-                            Some(k) => on_edges.insert(k, new),
-                            None => inside.insert(key, new),
-                        };
+                        if let Some(k) = edge {
+                            on_edges.insert(k, new);
+                        } else {
+                            inside.push((key, new));
+                        }
                         new
                     })
                 };
