@@ -56,8 +56,12 @@
 //! `R_k = M (Y_{k+1} - Y_k) / tau_k^2` off the supports; the increment
 //! ends where it is within Newton's residual tolerance of the external
 //! forces. As `tau` grows the pseudo-steps become Newton's, and converge
-//! as fast. Only increments without friction are relaxed (friction's
-//! rounds lag a normal force the pseudo-steps would move).
+//! as fast. With friction, each of the increment's rounds is relaxed
+//! alike: within a round the friction term is an energy (the stick
+//! round's springs, or the friction lagged at the previous round's
+//! solution), so the pseudo-steps minimise the round's potential as they
+//! minimise a frictionless one, and the rounds then lag the normal force
+//! as before.
 
 use super::terms::{FrictionTerm, SelfFrictionTerm};
 use super::{
@@ -90,7 +94,9 @@ pub struct StaticStepper {
     pub from: f64,
     /// Whether an increment Newton cannot solve is relaxed in
     /// pseudo-time (module docs): the run asks it of an increment already
-    /// halved, whose halving did not help.
+    /// halved, whose halving did not help, and of a finer level's settle
+    /// at once (its load is whole from the start: halving it would unload
+    /// the carried shape).
     pub relax: bool,
 }
 
@@ -145,10 +151,15 @@ impl StaticStepper {
                 gas: &gas,
             };
             let solved = solve_increment(
-                self.relax && !rounds,
+                self.relax,
                 model,
                 terms,
-                (&state.positions, &mut state.contact),
+                // A round after the first relaxes from the round before's
+                // solution, the increment's first from its start.
+                (
+                    if lagging { &ws.lag } else { &state.positions },
+                    &mut state.contact,
+                ),
                 &mut ws.y,
                 length,
                 settings,
@@ -221,7 +232,8 @@ const RELAX_SHORTEST: f64 = 1e-6;
 
 /// Solves the static increment `base` (its inertia unset) from `y` by
 /// Newton, and where that fails and `relax` is set, by pseudo-transient
-/// continuation from the increment's `start` (module docs); the
+/// continuation from `start` (the increment's start, or a friction
+/// round's: the round before's solution; module docs); the
 /// arguments otherwise [`solve_step`]'s. Returns the Newton iterations of
 /// the pseudo-steps (or of the plain solve) and the last one's energies.
 #[allow(clippy::too_many_arguments)]

@@ -257,9 +257,11 @@ fn build_level(
 /// settles the level from the carried shape (measured: 41 on the
 /// quasi-static 15-ring disc's first level, 171 on the gripped tester's,
 /// which stalls at the examples' 30 and fails through 6 halvings). Where
-/// even these do not suffice the increment is halved as any step is
-/// (`[solver] max_cutbacks`): on the 8-ring disc of the tests the first
-/// level fails in 200 from the full load and settles from half of it.
+/// even these do not suffice the increment is relaxed in pseudo-time at
+/// once, not halved (`integrator::statics`): on the 8-ring disc of the
+/// tests the second level fails in 200 from the full load and is relaxed
+/// (276 iterations in all; halved instead, it settled from a quarter of
+/// the load, in another fold pattern).
 pub const LEVEL_ITERATIONS: usize = 200;
 
 /// The state `coarse` carried onto `fine`'s mesh by `transfer`, at rest

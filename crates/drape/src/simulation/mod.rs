@@ -747,6 +747,15 @@ impl Stepper<'_, '_> {
         if self.stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
             return Err(NewtonError::Interrupted { iteration: 0 });
         }
+        // A finer level's settle is relaxed without a halving first: its
+        // increment starts at the full load, from the coarser level's
+        // shape, and half the load would unload that shape rather than
+        // ease the step.
+        let depth = if self.levels.marks.is_empty() {
+            depth
+        } else {
+            depth.max(RELAX_DEPTH)
+        };
         advance(
             self.setup,
             &mut self.state,
@@ -1133,7 +1142,8 @@ fn static_hint(model: &Model, shortfall: Option<FrictionShortfall>) -> String {
 }
 
 /// The static increments that [`StaticStepper::relax`]es: those halved
-/// at least this often (a halving that did not help).
+/// at least this often (a halving that did not help), and every finer
+/// level's settle.
 const RELAX_DEPTH: usize = 1;
 
 fn advance(
