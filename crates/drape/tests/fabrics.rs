@@ -34,3 +34,41 @@ fn every_fabric_of_the_library_builds() {
         assert!(model.contact().is_some(), "{}: no pedestal", file.display());
     }
 }
+
+/// The published set of Matsudaira et al. (2015; issue 45,
+/// docs/fabrics.md): each file gives its fabric in KES units, and what
+/// drape reads from it is the table's — the bending length
+/// `(B / (W g))^(1/3)` the transcription lists (2.12, 1.60, 1.88 and 1.22
+/// cm, to its rounding of 0.005 cm), and the weight `W g` per area.
+#[test]
+fn the_matsudaira_files_carry_the_published_bending_lengths() {
+    use drape::scenario::Scenario;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/fabrics");
+    let published = [
+        ("matsudaira2015-a-cotton-broad.toml", 2.12, 12.38),
+        ("matsudaira2015-b-wool-tropical.toml", 1.60, 16.29),
+        ("matsudaira2015-c-polyester-tropical.toml", 1.88, 11.65),
+        ("matsudaira2015-f-polyester-faille.toml", 1.22, 10.43),
+    ];
+    for (name, c_cm, w_mg_cm2) in published {
+        let file = dir.join(name);
+        let text = std::fs::read_to_string(&file).unwrap();
+        let s = Scenario::parse(&text, &file).unwrap_or_else(|e| panic!("{e}"));
+        let m = &s.material;
+        // W in mg/cm² is 0.01 kg/m² per unit.
+        let areal = m.density() * m.thickness();
+        assert!(
+            (areal - 0.01 * w_mg_cm2).abs() < 1e-12,
+            "{name}: {areal} kg/m²"
+        );
+        let b = s.material.bending_rigidity.as_ref().unwrap();
+        for dir in ["warp", "weft"] {
+            let rigidity = b[dir].as_float().unwrap();
+            let c = (rigidity / (areal * 9.80665)).cbrt() * 100.0;
+            assert!(
+                (c - c_cm).abs() <= 0.005,
+                "{name}: {dir} bending length {c} cm against {c_cm} cm"
+            );
+        }
+    }
+}
