@@ -39,6 +39,9 @@ summary() { # label, lab DC (%), lab nodes, test directory
 import json, sys
 label, lab_dc, lab_nodes, out = sys.argv[1:5]
 t = json.load(open(f"{out}/test.json"))
+if not t["measured"]:
+    print(f"{label}: lab {lab_dc} %, {lab_nodes} nodes | no specimen measured (see {out}.log)")
+    sys.exit(0)
 folds = ", ".join(f"{k} ({v})" for k, v in sorted(t["fold_histogram"].items(), key=lambda kv: int(kv[0])))
 lo, hi = t["ci95"] if t.get("ci95") else (float("nan"), float("nan"))
 slowest = max(s.get("wall_seconds") or 0.0 for s in t["specimens"])

@@ -62,12 +62,12 @@ fn the_matsudaira_files_carry_the_published_bending_lengths() {
             "{name}: {areal} kg/m²"
         );
         let b = s.material.bending_rigidity.as_ref().unwrap();
-        for dir in ["warp", "weft"] {
-            let rigidity = b[dir].as_float().unwrap();
+        for direction in ["warp", "weft"] {
+            let rigidity = b[direction].as_float().unwrap();
             let c = (rigidity / (areal * 9.80665)).cbrt() * 100.0;
             assert!(
                 (c - c_cm).abs() <= 0.005,
-                "{name}: {dir} bending length {c} cm against {c_cm} cm"
+                "{name}: {direction} bending length {c} cm against {c_cm} cm"
             );
         }
     }

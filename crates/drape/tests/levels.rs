@@ -332,3 +332,23 @@ fn bad_refine_keys_are_refused_by_name() {
         "{base}\n[refine]\nalso = [\"rim\", \"contact\"]\n"
     ));
 }
+
+/// A finer level's settle is one increment at the full load from the
+/// carried shape; where Newton cannot solve it, it is relaxed in
+/// pseudo-time at once rather than halved (halving would unload the
+/// carried shape). The tester's second level fails in 200 iterations:
+/// with no halvings allowed it failed before (the run stopped there) and
+/// now settles, relaxed, with no cut-back.
+#[test]
+fn a_level_newton_cannot_settle_is_relaxed_without_halving() {
+    let text = tester().replace(
+        "max_iterations = 200",
+        "max_iterations = 200\nmax_cutbacks = 0",
+    );
+    assert!(text.contains("max_cutbacks = 0"));
+    let out = temp_dir("levels-relaxed");
+    let summary =
+        run_levels(&text, &out, RunControl::default(), &mut |_| {}).expect("the level is relaxed");
+    assert_eq!(summary.levels.len(), 3);
+    assert_eq!(summary.cutbacks, 0);
+}

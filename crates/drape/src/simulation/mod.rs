@@ -911,7 +911,7 @@ impl Stepper<'_, '_> {
             cause,
             hint: if statics && level > 0 {
                 format!(
-                    "; this is refinement level {level}'s settle from the coarser level's shape, one increment at the full load ({} Newton iterations at most, {} halvings): give it more ([solver] max_iterations, max_cutbacks), refine less at a time ([refine] fraction), or start from a finer coarse mesh",
+                    "; this is refinement level {level}'s settle from the coarser level's shape, one increment at the full load ({} Newton iterations at most, relaxed in pseudo-time, then {} halvings): give it more ([solver] max_iterations, max_cutbacks), refine less at a time ([refine] fraction), or start from a finer coarse mesh",
                     self.setup.newton.max_iterations, self.setup.max_cutbacks
                 )
             } else if statics {
