@@ -117,3 +117,51 @@ fn a_settle_with_friction_is_relaxed_to_the_fine_paths_equilibrium() {
     let fine = run(&with_friction(20, 200, 6, 0.3), "fine-friction").expect("the fine path");
     same_rest(&relaxed, &fine);
 }
+
+/// A relaxed increment's pseudo-steps are solved to an increment
+/// tolerance of only 1e-6 (`integrator::statics`, "Relaxation in
+/// pseudo-time"), but the one that ends the increment is solved again to
+/// `[solver] tolerance`: the increment's last Newton increment is within
+/// it. The settle's first quarter of the weight, relaxed at once (plain
+/// Newton fails in 15 iterations: the skirt buckles), to 1e-8 and 1e-9.
+#[test]
+fn the_pseudo_step_that_ends_a_relaxed_increment_is_solved_to_full_tolerance() {
+    use drape::integrator::{State, StaticStepper, newmark::DynamicWorkspace};
+    let s = setup(&quasi_static(4, 15, 0));
+    let length = simulation::reference_length(&s.model.initial_positions());
+    for tolerance in [1e-8, 1e-9] {
+        let settings = drape::solver::NewtonSettings {
+            tolerance,
+            ..s.newton
+        };
+        let mut ws = DynamicWorkspace::new(&s.model).unwrap();
+        let mut state = State::at_rest(&s.model, s.model.initial_positions());
+        let plain = StaticStepper::default().step(
+            &s.model,
+            &mut state.clone(),
+            0.25,
+            &settings,
+            length,
+            &mut ws,
+        );
+        assert!(plain.is_err(), "{plain:?}");
+        let relaxed = StaticStepper {
+            from: 0.0,
+            relax: true,
+        }
+        .step(&s.model, &mut state, 0.25, &settings, length, &mut ws)
+        .expect("relaxed");
+        let increments = &relaxed.newton.increments;
+        let last = *increments.last().unwrap();
+        assert!(
+            last <= tolerance,
+            "last increment {last:e} of {increments:?}"
+        );
+        // More than one Newton solve went into it: it was relaxed.
+        assert!(
+            relaxed.newton.iterations > 15,
+            "{}",
+            relaxed.newton.iterations
+        );
+    }
+}
