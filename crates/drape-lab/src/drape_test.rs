@@ -77,7 +77,8 @@ fn is_tests(json: &Path) -> bool {
 pub enum Prior {
     /// A completed run: nothing to do.
     Completed,
-    /// An interrupted run with its checkpoint: resume it.
+    /// An interrupted run with its checkpoint, or a killed one (a
+    /// checkpoint and no summary): resume it.
     Interrupted,
     /// Nothing usable (none, another text, a failure): run afresh.
     Nothing,
@@ -86,11 +87,13 @@ pub enum Prior {
 /// What `dir` holds of a run of `text`.
 pub fn prior(dir: &Path, text: &str) -> Prior {
     let same = std::fs::read_to_string(dir.join("scenario.toml")).is_ok_and(|t| t == text);
+    let checkpoint = dir.join("checkpoint.bin").is_file();
     match summary(dir) {
         Some(s) if same && s["status"] == "completed" => Prior::Completed,
-        Some(s) if same && s["status"] == "interrupted" && dir.join("checkpoint.bin").is_file() => {
-            Prior::Interrupted
-        }
+        Some(s) if same && s["status"] == "interrupted" && checkpoint => Prior::Interrupted,
+        // A run killed before it could say so (no summary yet, or a
+        // multilevel settle's on a finer level) left its checkpoint.
+        None if same && checkpoint => Prior::Interrupted,
         _ => Prior::Nothing,
     }
 }
@@ -276,5 +279,45 @@ pub fn words(e: &Ensemble, count: usize) -> String {
             format!("{of}: DC {mean:.3}, {folds} folds (one specimen: no spread)")
         }
         _ => format!("{of}: no statistics"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Prior, prior};
+
+    /// What a specimen's directory holds decides what a test run again
+    /// does with it: a completed run is kept, an interrupted one and a
+    /// killed one (a checkpoint, no summary: a multilevel settle killed on
+    /// a finer level) resume, anything else — another text, a failure, a
+    /// killed run without a checkpoint — runs afresh.
+    #[test]
+    fn a_killed_specimen_with_a_checkpoint_is_resumed() {
+        let dir = std::env::temp_dir().join(format!("drape-prior-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let text = "title = \"specimen\"\n";
+        std::fs::write(dir.join("scenario.toml"), text).unwrap();
+        let summary = |status: Option<&str>| match status {
+            Some(s) => std::fs::write(dir.join("summary.json"), format!("{{\"status\": \"{s}\"}}"))
+                .unwrap(),
+            None => {
+                let _ = std::fs::remove_file(dir.join("summary.json"));
+            }
+        };
+        summary(None);
+        assert_eq!(prior(&dir, text), Prior::Nothing);
+        std::fs::write(dir.join("checkpoint.bin"), b"state").unwrap();
+        assert_eq!(prior(&dir, text), Prior::Interrupted);
+        assert_eq!(prior(&dir, "title = \"another\"\n"), Prior::Nothing);
+        for (status, expected) in [
+            ("interrupted", Prior::Interrupted),
+            ("completed", Prior::Completed),
+            ("failed", Prior::Nothing),
+        ] {
+            summary(Some(status));
+            assert_eq!(prior(&dir, text), expected, "{status}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

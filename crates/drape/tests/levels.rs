@@ -256,6 +256,61 @@ fn a_multilevel_settle_resumes_across_a_refinement_bit_for_bit() {
             .collect::<Vec<_>>()
     };
     assert_eq!(dcs(&summary), dcs(&resumed));
+    // Every level's final shape is in the collection, the resumed run's
+    // as the whole run's.
+    let pvd = |dir: &Path| std::fs::read_to_string(dir.join("fields.pvd")).unwrap();
+    let mut end = 0;
+    for l in &summary.levels {
+        end += l.steps;
+        let frame = format!("fields/step_{end:06}.vtu");
+        assert!(
+            pvd(&whole).contains(&frame),
+            "{frame} not in\n{}",
+            pvd(&whole)
+        );
+    }
+    assert_eq!(pvd(&whole), pvd(&cut));
+}
+
+/// A multilevel settle killed on its second refined level (here: a panic
+/// after that level's step, before the run could record it) leaves no
+/// summary that says `"completed"` — a finished coarser level writes
+/// none, so the run does not look finished — and a checkpoint of the
+/// level's start, from which it resumes to the uninterrupted run's
+/// history and collection, byte for byte.
+#[test]
+fn a_multilevel_settle_killed_on_a_finer_level_resumes_from_that_level() {
+    let text = tester();
+    let whole = temp_dir("levels-kill-whole");
+    let summary = run_levels(&text, &whole, RunControl::default(), &mut |_| {}).unwrap();
+    let last = summary.steps;
+    assert_eq!(summary.levels.len(), 3, "{:?}", summary.levels);
+    let killed = temp_dir("levels-killed");
+    let kill = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        run_levels(&text, &killed, RunControl::default(), &mut |info| {
+            assert!(info.step < last, "killed");
+        })
+    }));
+    assert!(kill.is_err(), "the run was not killed");
+    assert!(
+        !killed.join("summary.json").exists(),
+        "{}",
+        std::fs::read_to_string(killed.join("summary.json")).unwrap()
+    );
+    let control = RunControl {
+        resume: true,
+        ..RunControl::default()
+    };
+    let resumed = run_levels(&text, &killed, control, &mut |_| {}).unwrap();
+    assert_eq!(resumed.steps, last);
+    for file in ["history.csv", "fields.pvd"] {
+        assert_eq!(
+            std::fs::read(whole.join(file)).unwrap(),
+            std::fs::read(killed.join(file)).unwrap(),
+            "{file}"
+        );
+    }
+    assert_eq!(resumed.levels.len(), 3);
 }
 
 /// `also`: with a Dörfler share that marks almost nothing, `"rim"` still

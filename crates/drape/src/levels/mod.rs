@@ -103,8 +103,14 @@ pub fn run_with(
     loop {
         let current = level.as_ref().unwrap_or(setup);
         let session = RunControl { resume, ..control };
-        let finished =
-            simulation::run_level(current, out, observer, session, start.take(), &levels)?;
+        let finished = simulation::run_level(
+            current,
+            out,
+            observer,
+            session,
+            start.take(),
+            (&levels, true),
+        )?;
         resume = false;
         let since = Instant::now();
         let k = levels.marks.len();
@@ -152,14 +158,29 @@ pub fn run_with(
         record.wall_seconds += since.elapsed().as_secs_f64();
         levels.records.push(record);
         let converged = change.is_some_and(|c| c < plan.tolerance);
+        let mut summary = finished.summary;
+        summary.levels.clone_from(&levels.records);
+        summary.wall_seconds += since.elapsed().as_secs_f64();
         if k == plan.levels || converged {
-            let mut summary = finished.summary;
-            summary.levels.clone_from(&levels.records);
-            summary.wall_seconds += since.elapsed().as_secs_f64();
             summary.message = format!("{}; {}", summary.message, says(&levels.records, converged));
             simulation::rewrite_summary(out, &summary)?;
             return Ok(summary);
         }
+        // The level's session wrote no summary (the run goes on): one that
+        // cannot refine records this one's, failed.
+        let failed = |e: RunError| {
+            let mut summary = summary.clone();
+            summary.status = "failed".into();
+            summary.message = e.to_string();
+            match simulation::rewrite_summary(out, &summary) {
+                Ok(()) => e,
+                Err(RunError::Io { error, .. }) => RunError::Unrecorded {
+                    cause: Box::new(e),
+                    error,
+                },
+                Err(other) => other,
+            }
+        };
         // Refine, carry the state over, build the finer level.
         let flags = if plan.uniform {
             vec![true; model.mesh().element_count()]
@@ -179,7 +200,7 @@ pub fn run_with(
             flags
         };
         let transfer = Transfer::new(model.mesh(), &flags, &greens)
-            .map_err(|e| refine_error(out, k + 1, e.to_string()))?;
+            .map_err(|e| failed(refine_error(out, k + 1, e.to_string())))?;
         greens.clone_from(&transfer.refinement.greens);
         levels
             .marks
@@ -193,7 +214,8 @@ pub fn run_with(
             finished.state.time,
             out,
             k + 1,
-        )?;
+        )
+        .map_err(failed)?;
         let state = carry(&next, &transfer, &finished.state);
         let mut counters = finished.counters;
         counters.wall_seconds += since.elapsed().as_secs_f64();

@@ -410,7 +410,15 @@ pub fn run_with(
     observer: &mut dyn FnMut(&StepInfo),
     control: RunControl,
 ) -> Result<Summary, RunError> {
-    run_level(setup, out, observer, control, None, &Levels::default()).map(|f| f.summary)
+    run_level(
+        setup,
+        out,
+        observer,
+        control,
+        None,
+        (&Levels::default(), false),
+    )
+    .map(|f| f.summary)
 }
 
 /// A finer level's start in a multilevel settle (`crate::levels`): the
@@ -444,14 +452,22 @@ pub struct Finished {
 /// level of a multilevel settle, which goes on writing the history and
 /// the collection where the coarser level left them. `levels` is the
 /// multilevel record so far, which the checkpoints keep and the summary
-/// lists.
+/// lists. With `multilevel`, a session that ends as scheduled (or at
+/// rest) writes no summary: the caller decides whether the run goes on
+/// to a finer level, and writes the run's summary once it ends
+/// ([`rewrite_summary`]), so that `summary.json` never says
+/// `"completed"` of a run still refining (a run killed on a finer level
+/// would otherwise look finished). A session that fails or is
+/// interrupted writes its summary as ever; a finer level starts with a
+/// checkpoint (with `checkpoint_every` 0 too), so that a kill loses at
+/// most that level's work.
 pub fn run_level(
     setup: &Setup,
     out: &Path,
     observer: &mut dyn FnMut(&StepInfo),
     control: RunControl,
     level: Option<LevelStart>,
-    levels: &Levels,
+    (levels, multilevel): (&Levels, bool),
 ) -> Result<Finished, RunError> {
     let mut recorded = false;
     let leveled = level.is_some();
@@ -460,7 +476,7 @@ pub fn run_level(
         out,
         observer,
         control,
-        (level, levels),
+        (level, levels, multilevel),
         &mut recorded,
     ) {
         // The loop's own ends (a failed step, an I/O error while stepping,
@@ -492,7 +508,7 @@ fn run_session(
     out: &Path,
     observer: &mut dyn FnMut(&StepInfo),
     control: RunControl,
-    (level, levels): (Option<LevelStart>, &Levels),
+    (level, levels, multilevel): (Option<LevelStart>, &Levels, bool),
     recorded: &mut bool,
 ) -> Result<Finished, RunError> {
     let start = Instant::now();
@@ -503,6 +519,7 @@ fn run_session(
     let x = model.initial_positions();
     let length = reference_length(&x);
     let (schedule, end_time) = (setup.analysis.schedule(), setup.analysis.end_time());
+    let leveled = level.is_some();
     let Start {
         state,
         counters,
@@ -581,7 +598,14 @@ fn run_session(
             observer,
             levels,
             pending,
+            multilevel,
         };
+        // A finer level's first resume point, whatever `checkpoint_every`
+        // says: its carried shape on its mesh (a kill during its settle,
+        // which may take an hour, resumes here rather than from scratch).
+        if leveled {
+            run.checkpoint()?;
+        }
         // An output that cannot be written ends the run as a failed step
         // does: the summary says why.
         let end = match controller {
@@ -648,6 +672,9 @@ struct Stepper<'a, 'scope> {
     observer: &'a mut dyn FnMut(&StepInfo),
     /// The multilevel record so far (empty without `[refine]`).
     levels: &'a Levels,
+    /// A level of a multilevel settle: the caller writes the summary of a
+    /// session that ends as scheduled ([`run_level`]).
+    multilevel: bool,
     /// The sub-steps left of the scheduled step under way, where a stop
     /// inside it ends the run (and a resume goes on with them); else
     /// empty.
@@ -931,13 +958,22 @@ impl Stepper<'_, '_> {
         // After an output error no more is written but the summary: the
         // last frame would not match the history.
         let output_failed = matches!(&end, End::Failed(RunError::Io { .. }));
+        // The last frame is listed with the others: a multilevel settle's
+        // next level starts its collection from `written`, which would
+        // otherwise leave this level's final shape out of `fields.pvd`.
         let last_frame =
             if self.counters.last_written != self.counters.step && !interrupted && !output_failed {
-                self.frame_writer.submit(Snapshot::of(
+                let submitted = self.frame_writer.submit(Snapshot::of(
                     self.counters.step,
                     &self.state,
                     self.last_contact.as_ref(),
-                ))
+                ));
+                if submitted.is_ok() {
+                    self.written.push((self.state.time, self.counters.step));
+                    self.counters.last_written = self.counters.step;
+                    self.counters.since_frame = 0;
+                }
+                submitted
             } else {
                 Ok(())
             };
@@ -995,7 +1031,13 @@ impl Stepper<'_, '_> {
             summary.message = watch.message(figures.time, counters.step);
             summary.at_rest = Some(true);
         }
-        if let Err(e) = write_summary(self.out, &summary) {
+        let deferred = self.multilevel && failure.is_none() && !interrupted;
+        let recorded = if deferred {
+            Ok(())
+        } else {
+            write_summary(self.out, &summary)
+        };
+        if let Err(e) = recorded {
             let RunError::Io { error, .. } = e else {
                 return Err(e);
             };
