@@ -146,7 +146,9 @@ def test(
             what was done; calling it again finishes the test.
 
     Specimens completed by an earlier call (same scenario, seed) are not
-    run again; a failed one runs again; an interrupted one resumes.
+    run again; a failed one runs again; an interrupted one resumes, as does
+    one killed with a checkpoint left and no summary written (a multilevel
+    specimen killed on a finer level resumes at that level's start).
     """
     from ._specimens import test as run_test
 
