@@ -276,11 +276,13 @@ fn a_multilevel_settle_resumes_across_a_refinement_bit_for_bit() {
 /// after that level's step, before the run could record it) leaves no
 /// summary that says `"completed"` — a finished coarser level writes
 /// none, so the run does not look finished — and a checkpoint of the
-/// level's start, from which it resumes to the uninterrupted run's
-/// history and collection, byte for byte.
+/// level's start, written without `checkpoint_every` (0 here), from
+/// which it resumes to the uninterrupted run's history and collection,
+/// byte for byte.
 #[test]
 fn a_multilevel_settle_killed_on_a_finer_level_resumes_from_that_level() {
-    let text = tester();
+    let text = tester().replace("checkpoint_every = 1", "checkpoint_every = 0");
+    assert!(text.contains("checkpoint_every = 0"));
     let whole = temp_dir("levels-kill-whole");
     let summary = run_levels(&text, &whole, RunControl::default(), &mut |_| {}).unwrap();
     let last = summary.steps;
@@ -297,6 +299,7 @@ fn a_multilevel_settle_killed_on_a_finer_level_resumes_from_that_level() {
         "{}",
         std::fs::read_to_string(killed.join("summary.json")).unwrap()
     );
+    assert!(killed.join("checkpoint.bin").exists());
     let control = RunControl {
         resume: true,
         ..RunControl::default()

@@ -230,10 +230,11 @@ const RELAX_EASY: usize = 4;
 /// `[solver] max_iterations` says): a longer one is cut. A pseudo-step
 /// across a fold converges slowly (projected Newton clipping the
 /// unstable direction); cut at 30, half of a relaxed level's iterations
-/// went into pseudo-steps that were then repeated shorter. With 100, a
-/// Matsudaira A level relaxes in 1,130 iterations against 2,694 and a B
-/// level in 1,705 against 3,521 (docs/performance.md, "What a relaxed
-/// pseudo-step may cost").
+/// went into pseudo-steps that were then repeated shorter. With 100 (and
+/// pseudo-steps solved to 1e-8, before `RELAX_TOLERANCE`), a Matsudaira
+/// A level relaxed in 1,130 iterations against 2,694 and a B level in
+/// 1,705 against 3,521 (docs/performance.md, "What a relaxed pseudo-step
+/// may cost").
 const RELAX_ITERATIONS: usize = 100;
 /// The increment tolerance (`|dY| / L`) of a pseudo-step that does not
 /// end its increment, where `[solver] tolerance` is tighter. A pseudo-step
