@@ -421,17 +421,15 @@ pub struct Bending {
     blocks: Vec<usize>,
     /// Where each patch's blocks start in `blocks`.
     block_start: Vec<usize>,
-    /// Patch lists that share no node, for the parallel assembly.
-    colours: Vec<Vec<usize>>,
-    /// Below [`crate::model::PARALLEL_ABOVE`] elements: the patches in two
-    /// halves that share no node, on two threads ([`crate::par`]), then
-    /// those at the interface colour by colour, each colour in two halves;
-    /// `None` from that size on: each colour in rayon's chunks.
+    /// The order of the assembly: the patches in two halves that share no
+    /// node, on two threads, then those at the interface colour by
+    /// colour, each colour in two halves; from
+    /// [`crate::model::PARALLEL_ABOVE`] elements on, each half split again
+    /// into parts of fewer than [`crate::solver::pattern::ASSEMBLY_LEAF`] patches,
+    /// on rayon's pool ([`crate::solver::pattern::Halves`]). `None` until
+    /// [`Bending::attach`].
     halves: Option<crate::solver::pattern::Halves>,
 }
-
-/// Patches per parallel task: enough work to outweigh a task's hand-off.
-const CHUNK: usize = 256;
 
 impl Bending {
     /// The patches of `mesh` for `rigidity`, fitted on the mesh's
@@ -484,7 +482,6 @@ impl Bending {
             nodes,
             blocks: Vec::new(),
             block_start: Vec::new(),
-            colours: Vec::new(),
             halves: None,
         })
     }
@@ -505,16 +502,20 @@ impl Bending {
     }
 
     /// Records where each patch's Hessian blocks lie in `pattern` (which
-    /// must include the stencils), and how the assembly runs: on rayon's
-    /// threads with `parallel`, else in two halves of the patches (at the
-    /// reference positions `nodes`) on two threads.
+    /// must include the stencils), and how the assembly runs: in two
+    /// halves of the patches (at the reference positions `nodes`) on two
+    /// threads, with `parallel` each half split again into parts on
+    /// rayon's pool.
     pub(crate) fn attach(&mut self, pattern: &SparsePattern, parallel: bool, nodes: &[[f64; 3]]) {
+        use crate::solver::pattern::{ASSEMBLY_LEAF, Halves, colour_elements};
         self.blocks.clear();
         self.block_start.clear();
-        self.colours =
-            crate::solver::pattern::colour_elements(pattern.dimension() / 3, self.stencils());
-        self.halves = (!parallel)
-            .then(|| crate::solver::pattern::Halves::of(nodes, self.stencils(), &self.colours));
+        let colours = colour_elements(pattern.dimension() / 3, self.stencils());
+        self.halves = Some(if parallel {
+            Halves::nested(nodes, self.stencils(), &colours, ASSEMBLY_LEAF)
+        } else {
+            Halves::of(nodes, self.stencils(), &colours)
+        });
         for p in &self.patches {
             self.block_start.push(self.blocks.len());
             for &a in p.nodes() {
@@ -551,7 +552,6 @@ impl Bending {
         h: Option<&mut [f64]>,
         project: Option<&[bool]>,
     ) -> f64 {
-        use rayon::prelude::*;
         let (node_ptr, _) = pattern.node_graph();
         let want_h = h.is_some();
         let hp = Shared(h.map_or(std::ptr::null_mut(), |h| h.as_mut_ptr()));
@@ -597,35 +597,18 @@ impl Bending {
             }
             energy
         };
-        let mut energy = 0.0;
-        if let Some(halves) = &self.halves {
-            // Each thread's scratch kept between assemblies (24 kB).
-            thread_local! {
-                static LOCAL: std::cell::RefCell<kernel::Local> =
-                    std::cell::RefCell::new(kernel::Local::new());
-            }
-            let run = |part: &[usize]| {
-                LOCAL.with(|l| work(&mut l.borrow_mut(), &mut part.iter().copied()))
-            };
-            let (ea, eb) = crate::par::join(|| run(&halves.first), || run(&halves.second));
-            energy += ea + eb;
-            for colour in &halves.interface {
-                let (a, b) = colour.split_at(colour.len() / 2);
-                let (ea, eb) = crate::par::join(|| run(a), || run(b));
-                energy += ea + eb;
-            }
-            return energy;
+        // Each thread's scratch kept between assemblies (24 kB).
+        thread_local! {
+            static LOCAL: std::cell::RefCell<kernel::Local> =
+                std::cell::RefCell::new(kernel::Local::new());
         }
-        for colour in &self.colours {
-            let parts: Vec<f64> = colour
-                .par_chunks(CHUNK)
-                .map_init(kernel::Local::new, |local, chunk| {
-                    work(local, &mut chunk.iter().copied())
-                })
-                .collect();
-            energy += parts.iter().sum::<f64>();
-        }
-        energy
+        let halves = self
+            .halves
+            .as_ref()
+            .expect("Bending::attach runs before the assembly");
+        halves.run(&|part: &[usize]| {
+            LOCAL.with(|l| work(&mut l.borrow_mut(), &mut part.iter().copied()))
+        })
     }
 
     /// The bending energy at `y` (J).
@@ -728,15 +711,15 @@ mod tests {
         }
     }
 
-    /// The rayon assembly (colours, chunks) adds the same gradient and
-    /// Hessian as the small model's (colours in halves), to round-off (the
-    /// order of the sums differs), and to the bit whatever the number of
-    /// threads.
+    /// The large-mesh assembly (halves split again, on rayon's pool) adds
+    /// the same gradient and Hessian as the small model's (one split), to
+    /// round-off (the order of the sums differs), and to the bit whatever
+    /// the number of threads.
     #[test]
     fn parallel_assembly_matches_the_serial_one() {
         let mesh = rectangle(
             [0.2, 0.2],
-            [48, 48],
+            [64, 64],
             Pattern::Alternate,
             [0.0; 3],
             ElementOrder::Linear,
@@ -747,7 +730,8 @@ mod tests {
         let mut parallel = serial.clone();
         serial.attach(&pattern, false, &mesh.nodes);
         parallel.attach(&pattern, true, &mesh.nodes);
-        assert!(parallel.colours.len() > 1 && parallel.halves.is_none() && serial.halves.is_some());
+        let depth = |b: &Bending| b.halves.as_ref().unwrap().depth();
+        assert!(depth(&parallel) > 1 && depth(&serial) == 1);
         let y: Vec<f64> = mesh
             .nodes
             .iter()
@@ -773,11 +757,17 @@ mod tests {
         };
         assert!((e0 - e1).abs() <= 1e-12 * e0.abs(), "{e0} {e1}");
         assert!(close(&g0, &g1) && close(&h0, &h1));
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let (e2, g2, h2) = one.install(|| run(&parallel));
-        assert_eq!((e1.to_bits(), &g1, &h1), (e2.to_bits(), &g2, &h2));
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (e2, g2, h2) = pool.install(|| run(&parallel));
+            assert_eq!(
+                (e1.to_bits(), &g1, &h1),
+                (e2.to_bits(), &g2, &h2),
+                "{threads} threads"
+            );
+        }
     }
 }

@@ -1,11 +1,12 @@
 //! Parallel assembly of the internal forces and the Hessian, and of the
 //! follower pressure's forces and tangent.
 //!
-//! Elements are processed colour by colour (no two elements of a colour
-//! share a node), each colour in parallel with rayon; below
-//! [`super::PARALLEL_ABOVE`] elements, two halves of the mesh that share
-//! no node on two threads ([`crate::par`]), then the elements between them
-//! colour by colour. An element writes only the force entries of its own
+//! Elements are processed in two halves of the mesh that share no node, on
+//! two threads, then the elements between them colour by colour (no two
+//! elements of a colour share a node); from [`super::PARALLEL_ABOVE`]
+//! elements on, each half is split again, down to parts of fewer than
+//! [`crate::solver::pattern::ASSEMBLY_LEAF`] elements, on rayon's pool
+//! ([`crate::solver::pattern::Halves`]). An element writes only the force entries of its own
 //! nodes and the Hessian entries of its own node pairs, so the writes of
 //! elements that run at once never overlap. Each Hessian block's first
 //! element in that order writes it and the others add: the Hessian is not
@@ -237,37 +238,20 @@ impl Model {
     /// the sum of its results (in a fixed order: the result depends
     /// neither on the threads nor on rayon's scheduling). Elements that
     /// run at once share no node, so `work` may write the entries of its
-    /// elements' nodes without locks. Below [`super::PARALLEL_ABOVE`]
-    /// elements: the two halves of the mesh, the second on the helper
-    /// thread (`crate::par`: rayon's wake-ups cost more than such a loop),
-    /// then the elements at their interface, each colour in two halves;
-    /// each thread's scratch is kept between assemblies (7 kB to zero
-    /// otherwise). Above: colour by colour, each in parallel chunks.
+    /// elements' nodes without locks. The order is [`Model`]'s `halves`:
+    /// two halves of the mesh, the second on the helper thread
+    /// (`crate::par`: rayon's wake-ups cost more than a small mesh's
+    /// loop), then the elements at their interface, each colour in two
+    /// halves; from [`super::PARALLEL_ABOVE`] elements on, each half split
+    /// again into parts of fewer than [`crate::solver::pattern::ASSEMBLY_LEAF`] elements,
+    /// on rayon's pool. Each thread's scratch is kept between assemblies
+    /// (7 kB to zero otherwise).
     fn traverse(&self, work: impl Fn(&mut Local, &[usize]) -> f64 + Sync) -> f64 {
-        if let Some(halves) = &self.halves {
-            thread_local! {
-                static LOCAL: std::cell::RefCell<Local> = std::cell::RefCell::new(Local::new());
-            }
-            let run = |chunk: &[usize]| LOCAL.with(|l| work(&mut l.borrow_mut(), chunk));
-            let (ea, eb) = crate::par::join(|| run(&halves.first), || run(&halves.second));
-            let mut energy = ea + eb;
-            for c in &halves.interface {
-                let (a, b) = c.split_at(c.len() / 2);
-                let (ea, eb) = crate::par::join(|| run(a), || run(b));
-                energy += ea + eb;
-            }
-            return energy;
+        thread_local! {
+            static LOCAL: std::cell::RefCell<Local> = std::cell::RefCell::new(Local::new());
         }
-        let mut energy = 0.0;
-        for colour in &self.colours {
-            energy += colour
-                .par_chunks(CHUNK)
-                .map_init(Local::new, &work)
-                .collect::<Vec<f64>>()
-                .iter()
-                .sum::<f64>();
-        }
-        energy
+        self.halves
+            .run(&|part: &[usize]| LOCAL.with(|l| work(&mut l.borrow_mut(), part)))
     }
 
     /// Adds the follower pressure forces for the pressure `pressure` (Pa)

@@ -27,8 +27,8 @@ use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::quadrature::QuadratureRule;
 use crate::solver::SparsePattern;
-use crate::solver::pattern::Halves;
 use crate::solver::pattern::colour_elements;
+use crate::solver::pattern::{ASSEMBLY_LEAF, Halves};
 
 /// Everything that defines the discrete problem, independent of time.
 ///
@@ -71,13 +71,12 @@ pub struct Model {
     /// Hessian blocks no element adds into (the diagonal blocks of nodes
     /// outside every element), zeroed at each assembly.
     untouched_blocks: Vec<(usize, usize)>,
-    /// Element lists that share no node (parallel assembly).
-    colours: Vec<Vec<usize>>,
-    /// Below [`PARALLEL_ABOVE`] elements, the order of the assembly on two
-    /// threads ([`Model::assemble`]): two halves of the mesh that share no
-    /// node, one per thread, then the elements at their interface by
-    /// colour.
-    halves: Option<Halves>,
+    /// The order of the assembly ([`Model::assemble`]): two halves of the
+    /// mesh that share no node, one per thread, then the elements at
+    /// their interface by colour; from [`PARALLEL_ABOVE`] elements on,
+    /// each half split again into parts of fewer than [`ASSEMBLY_LEAF`]
+    /// elements, on rayon's pool.
+    halves: Halves,
     /// Mass matrix on the node graph, `M^ab = m[p_ab] I3` (kg).
     mass: Vec<f64>,
     /// `integral phi^a dA0` per node (m^2): consistent dead surface loads.
@@ -242,12 +241,16 @@ impl ModelBuilder {
         };
         let colours = colour_elements(mesh.node_count(), mesh.elements());
         let parallel = parallel_for(&mesh);
-        let halves = (!parallel).then(|| Halves::of(&mesh.nodes, mesh.elements(), &colours));
+        let halves = if parallel {
+            Halves::nested(&mesh.nodes, mesh.elements(), &colours, ASSEMBLY_LEAF)
+        } else {
+            Halves::of(&mesh.nodes, mesh.elements(), &colours)
+        };
         let mut bending = match bending {
             Some(rigidity) => Some(Bending::new(&mesh, rigidity, &clamped)?),
             None => None,
         };
-        let layout = Layout::new(&mesh, &colours, halves.as_ref(), bending.as_ref());
+        let layout = Layout::new(&mesh, &halves, bending.as_ref());
         if let Some(b) = &mut bending {
             b.attach(&layout.pattern, parallel, &mesh.nodes);
         }
@@ -273,7 +276,6 @@ impl ModelBuilder {
             element_blocks: layout.element_blocks,
             element_block_first: layout.element_block_first,
             untouched_blocks: layout.untouched_blocks,
-            colours,
             halves,
             mass,
             area_weights,
@@ -297,14 +299,9 @@ struct Layout {
 }
 
 impl Layout {
-    /// The layout of `mesh`'s elements assembled in the order of `colours`
-    /// and `halves`, on a pattern that also holds `bending`'s stencils.
-    fn new(
-        mesh: &Mesh,
-        colours: &[Vec<usize>],
-        halves: Option<&Halves>,
-        bending: Option<&Bending>,
-    ) -> Self {
+    /// The layout of `mesh`'s elements assembled in the order of
+    /// `halves`, on a pattern that also holds `bending`'s stencils.
+    fn new(mesh: &Mesh, halves: &Halves, bending: Option<&Bending>) -> Self {
         let pattern = match bending {
             None => SparsePattern::new(mesh.node_count(), mesh.elements()),
             Some(b) => SparsePattern::new(mesh.node_count(), mesh.elements().chain(b.stencils())),
@@ -325,11 +322,7 @@ impl Layout {
             let (ptr, _) = pattern.node_graph();
             let mut touched = vec![false; ptr[mesh.node_count()]];
             // The assembly's order (see `Model::assemble`).
-            let order: Vec<usize> = match halves {
-                Some(h) => h.order().collect(),
-                None => colours.iter().flatten().copied().collect(),
-            };
-            for e in order {
+            for e in halves.order() {
                 for k in n2 * e..n2 * (e + 1) {
                     first[k] = !touched[positions[k]];
                     touched[positions[k]] = true;
@@ -786,14 +779,18 @@ mod tests {
         }
     }
 
-    /// The two halves of the small-mesh assembly share no node, every
-    /// element is assembled once, and the interface is a thin strip (the
-    /// 20x20 pedestal mesh: 80 of 800 elements, two rows).
+    /// The two halves of the assembly share no node, every element is
+    /// assembled once, and the interface is a thin strip (the 20x20
+    /// pedestal mesh: 80 of 800 elements, two rows); on a mesh of
+    /// [`PARALLEL_ABOVE`] elements or more every split does the same, down
+    /// to parts of fewer than [`ASSEMBLY_LEAF`] elements.
     #[test]
     fn assembly_halves_share_no_node_and_cover_the_mesh() {
+        use crate::solver::pattern::{Halves, Part};
         let rectangles = [
             ([20, 20], ElementOrder::Linear),
             ([9, 4], ElementOrder::Cubic),
+            ([48, 48], ElementOrder::Linear),
         ]
         .map(|(divisions, order)| {
             let mesh = rectangle([0.2, 0.1], divisions, Pattern::Alternate, [0.0; 3], order);
@@ -805,21 +802,48 @@ mod tests {
             .chain([(disc(0.15, 9, [0.0; 3], ElementOrder::Quadratic), None)]);
         for (mesh, divisions) in meshes {
             let model = wrinkling_model(mesh);
-            let halves = model.halves.as_ref().expect("a small mesh");
-            let nodes_of = |list: &[usize]| {
-                let mut nodes: Vec<usize> = list
-                    .iter()
-                    .flat_map(|&e| model.mesh.element(e).to_vec())
-                    .collect();
+            let halves = &model.halves;
+            // The nodes of some elements, once each, and how many times
+            // the elements name a node.
+            let nodes_of = |list: &mut dyn Iterator<Item = usize>| {
+                let mut nodes: Vec<usize> =
+                    list.flat_map(|e| model.mesh.element(e).to_vec()).collect();
+                let named = nodes.len();
                 nodes.sort_unstable();
                 nodes.dedup();
-                nodes
+                (nodes, named)
             };
-            let (a, b) = (nodes_of(&halves.first), nodes_of(&halves.second));
-            assert!(a.iter().all(|v| b.binary_search(v).is_err()));
             let mut all: Vec<usize> = halves.order().collect();
             all.sort_unstable();
             assert_eq!(all, (0..model.mesh.element_count()).collect::<Vec<_>>());
+            // Every split: the sides share no node, each interface colour
+            // shares none within itself; the leaves are small.
+            type NodesOf<'a> = dyn Fn(&mut dyn Iterator<Item = usize>) -> (Vec<usize>, usize) + 'a;
+            fn check(h: &Halves, nodes_of: &NodesOf, leaves: &mut Vec<usize>) {
+                let (a, b) = (
+                    nodes_of(&mut h.first.order()).0,
+                    nodes_of(&mut h.second.order()).0,
+                );
+                assert!(a.iter().all(|v| b.binary_search(v).is_err()));
+                for c in &h.interface {
+                    let (unique, named) = nodes_of(&mut c.iter().copied());
+                    assert_eq!(unique.len(), named);
+                }
+                for part in [&h.first, &h.second] {
+                    match part {
+                        Part::Leaf(list) => leaves.push(list.len()),
+                        Part::Split(inner) => check(inner, nodes_of, leaves),
+                    }
+                }
+            }
+            let mut leaves = Vec::new();
+            check(halves, &nodes_of, &mut leaves);
+            if model.parallel() {
+                assert!(halves.depth() > 1);
+                assert!(leaves.iter().all(|&l| l < ASSEMBLY_LEAF), "{leaves:?}");
+            } else {
+                assert_eq!(halves.depth(), 1);
+            }
             let interface: usize = halves.interface.iter().map(Vec::len).sum();
             match divisions {
                 Some(divisions) => {
@@ -834,17 +858,6 @@ mod tests {
                     let third = model.mesh.element_count() / 3;
                     assert!(halves.first.len() >= third && halves.second.len() >= third);
                 }
-            }
-            // Each interface colour shares no node within itself.
-            for c in &halves.interface {
-                let nodes: Vec<usize> = c
-                    .iter()
-                    .flat_map(|&e| model.mesh.element(e).to_vec())
-                    .collect();
-                let mut unique = nodes.clone();
-                unique.sort_unstable();
-                unique.dedup();
-                assert_eq!(unique.len(), nodes.len());
             }
         }
     }

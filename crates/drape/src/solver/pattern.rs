@@ -368,46 +368,132 @@ pub(crate) fn gather_block(values: &[f64], base: usize, stride: usize) -> Block 
     ]
 }
 
-/// The small-mesh assembly order: elements `first` and `second` (each in
-/// index order) share no node, so two threads can add them up at once;
-/// the `interface` elements, which touch nodes of both, follow by colour.
+/// On meshes of [`crate::model::PARALLEL_ABOVE`] elements or more, the
+/// assembly splits the mesh until each part has fewer elements (or bending
+/// patches) than this, and adds each part up on one thread: 2,048 T3
+/// patches touch about a thousand nodes, whose Hessian columns (with
+/// bending, ~1.4 kB each) fit in a core's L2 cache (docs/performance.md,
+/// "Assembly in cache-sized parts").
+pub const ASSEMBLY_LEAF: usize = 2048;
+
+/// The assembly order: stencils (elements, bending patches) `first` and
+/// `second` share no node, so two threads can add them up at once; the
+/// `interface` stencils, which touch nodes of both, follow by colour, each
+/// colour in two halves. A side is a list in index order or, on a large
+/// mesh, split again the same way ([`Halves::nested`]): a nested
+/// dissection of the stencils, whose leaves are contiguous patches of the
+/// mesh. Each leaf's Hessian columns stay in cache while it is added up,
+/// where a colour's stencils, spread over the whole mesh and sharing no
+/// node, touch every column once per colour (docs/performance.md,
+/// "Assembly in cache-sized parts").
 #[derive(Debug, Clone)]
 pub(crate) struct Halves {
-    pub(crate) first: Vec<usize>,
-    pub(crate) second: Vec<usize>,
+    pub(crate) first: Part,
+    pub(crate) second: Part,
     pub(crate) interface: Vec<Vec<usize>>,
+    /// Run the halves on rayon's pool ([`Halves::nested`]) rather than on
+    /// [`crate::par`]'s helper ([`Halves::of`]).
+    rayon: bool,
+}
+
+/// One side of a [`Halves`] split.
+#[derive(Debug, Clone)]
+pub(crate) enum Part {
+    /// The stencils, in index order, added up on one thread.
+    Leaf(Vec<usize>),
+    /// Split again.
+    Split(Box<Halves>),
+}
+
+/// A stencil set being split: the stencils and their colours.
+struct Stencils<'n, 's> {
+    nodes: &'n [[f64; 3]],
+    list: Vec<&'s [usize]>,
+    colour: Vec<usize>,
+    colours: usize,
 }
 
 impl Halves {
     /// Splits the stencils (node lists: elements, bending patches) on
     /// nodes at `nodes`, coloured by `colours`, at the median of their
     /// centroids along the nodes' longest extent; a stencil touching a
-    /// node that stencils of both sides touch goes to the interface.
+    /// node that stencils of both sides touch goes to the interface. The
+    /// small-mesh order: one split, each half on one of two threads
+    /// ([`crate::par::join`]).
     pub(crate) fn of<'a>(
         nodes: &[[f64; 3]],
         stencils: impl Iterator<Item = &'a [usize]> + Clone,
         colours: &[Vec<usize>],
     ) -> Self {
-        let centroids: Vec<[f64; 3]> = stencils
-            .clone()
-            .map(|el| {
-                let mut c = [0.0; 3];
-                for &a in el {
-                    for i in 0..3 {
-                        c[i] += nodes[a][i] / el.len() as f64;
-                    }
-                }
-                c
-            })
-            .collect();
-        let count = centroids.len();
-        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-        for x in nodes {
-            for i in 0..3 {
-                lo[i] = lo[i].min(x[i]);
-                hi[i] = hi[i].max(x[i]);
+        Self::build(nodes, stencils, colours, usize::MAX, false)
+    }
+
+    /// As [`Halves::of`], each side with `leaf` stencils or more split
+    /// again (along its own longest extent), the halves run on rayon's
+    /// pool ([`rayon::join`]): the large-mesh order. `leaf` is at least 2.
+    pub(crate) fn nested<'a>(
+        nodes: &[[f64; 3]],
+        stencils: impl Iterator<Item = &'a [usize]> + Clone,
+        colours: &[Vec<usize>],
+        leaf: usize,
+    ) -> Self {
+        Self::build(nodes, stencils, colours, leaf.max(2), true)
+    }
+
+    fn build<'a>(
+        nodes: &[[f64; 3]],
+        stencils: impl Iterator<Item = &'a [usize]> + Clone,
+        colours: &[Vec<usize>],
+        leaf: usize,
+        rayon: bool,
+    ) -> Self {
+        let list: Vec<&[usize]> = stencils.collect();
+        let mut colour = vec![0; list.len()];
+        for (c, members) in colours.iter().enumerate() {
+            for &e in members {
+                colour[e] = c;
             }
         }
+        let set = Stencils {
+            nodes,
+            list,
+            colour,
+            colours: colours.len(),
+        };
+        let all: Vec<usize> = (0..set.list.len()).collect();
+        // The whole mesh is split along the extent of all its nodes.
+        let mut extent = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for x in nodes {
+            for i in 0..3 {
+                extent.0[i] = extent.0[i].min(x[i]);
+                extent.1[i] = extent.1[i].max(x[i]);
+            }
+        }
+        Self::split(&set, &all, extent, leaf, rayon)
+    }
+
+    /// Splits `subset` (stencil indices, increasing) along the longest
+    /// side of the box `extent`.
+    fn split(
+        set: &Stencils,
+        subset: &[usize],
+        extent: ([f64; 3], [f64; 3]),
+        leaf: usize,
+        rayon: bool,
+    ) -> Self {
+        let centroid = |e: usize| {
+            let el = set.list[e];
+            let mut c = [0.0; 3];
+            for &a in el {
+                for i in 0..3 {
+                    c[i] += set.nodes[a][i] / el.len() as f64;
+                }
+            }
+            c
+        };
+        let centroids: Vec<[f64; 3]> = subset.iter().map(|&e| centroid(e)).collect();
+        let count = subset.len();
+        let (lo, hi) = extent;
         let axis = (0..3)
             .max_by(|&i, &j| (hi[i] - lo[i]).total_cmp(&(hi[j] - lo[j])))
             .unwrap_or(0);
@@ -418,52 +504,126 @@ impl Halves {
                 .then(a.cmp(&b))
         });
         let mut side = vec![0u8; count];
-        for &e in &by_position[count / 2..] {
-            side[e] = 1;
+        for &k in &by_position[count / 2..] {
+            side[k] = 1;
         }
         // Nodes touched by each side (bit 0: first, bit 1: second).
-        let mut touched = vec![0u8; nodes.len()];
-        for (e, el) in stencils.clone().enumerate() {
-            for &a in el {
-                touched[a] |= 1 << side[e];
+        let mut touched = vec![0u8; set.nodes.len()];
+        for (k, &e) in subset.iter().enumerate() {
+            for &a in set.list[e] {
+                touched[a] |= 1 << side[k];
             }
         }
-        let interface_flags: Vec<bool> = stencils
-            .map(|el| el.iter().any(|&a| touched[a] == 3))
+        let at_interface: Vec<bool> = subset
+            .iter()
+            .map(|&e| set.list[e].iter().any(|&a| touched[a] == 3))
             .collect();
-        let at_interface = |e: usize| interface_flags[e];
         let (mut first, mut second) = (Vec::new(), Vec::new());
-        for e in (0..count).filter(|&e| !at_interface(e)) {
-            if side[e] == 0 {
+        let mut interface = vec![Vec::new(); set.colours];
+        for (k, &e) in subset.iter().enumerate() {
+            if at_interface[k] {
+                interface[set.colour[e]].push(e);
+            } else if side[k] == 0 {
                 first.push(e);
             } else {
                 second.push(e);
             }
         }
-        let interface = colours
-            .iter()
-            .map(|c| {
-                c.iter()
-                    .copied()
-                    .filter(|&e| at_interface(e))
-                    .collect::<Vec<_>>()
-            })
-            .filter(|c| !c.is_empty())
-            .collect();
+        interface.retain(|c| !c.is_empty());
+        let part = |members: Vec<usize>| {
+            if members.len() < leaf {
+                return Part::Leaf(members);
+            }
+            let mut extent = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+            for &e in &members {
+                for &a in set.list[e] {
+                    for i in 0..3 {
+                        extent.0[i] = extent.0[i].min(set.nodes[a][i]);
+                        extent.1[i] = extent.1[i].max(set.nodes[a][i]);
+                    }
+                }
+            }
+            Part::Split(Box::new(Self::split(set, &members, extent, leaf, rayon)))
+        };
         Self {
-            first,
-            second,
+            first: part(first),
+            second: part(second),
             interface,
+            rayon,
         }
     }
 
-    /// Every element, in the assembly's order.
-    pub(crate) fn order(&self) -> impl Iterator<Item = usize> + '_ {
-        self.first
-            .iter()
-            .chain(&self.second)
-            .chain(self.interface.iter().flatten())
-            .copied()
+    /// Every stencil, in the assembly's order: the first side's, the
+    /// second's, then the interface's by colour.
+    pub(crate) fn order(&self) -> Box<dyn Iterator<Item = usize> + '_> {
+        Box::new(
+            self.first
+                .order()
+                .chain(self.second.order())
+                .chain(self.interface.iter().flatten().copied()),
+        )
+    }
+
+    /// The sum of `work` over lists of stencils that together hold each
+    /// once, in [`Halves::order`]: the two sides at once (on two threads
+    /// where there are), then each interface colour in two halves at
+    /// once. Lists that run at once share no node. The sum is added up in
+    /// a fixed order: it depends neither on the threads nor on how they
+    /// were scheduled.
+    pub(crate) fn run(&self, work: &(impl Fn(&[usize]) -> f64 + Sync)) -> f64 {
+        let (a, b) = self.join(|| self.first.run(work), || self.second.run(work));
+        let mut sum = a + b;
+        for c in &self.interface {
+            let (x, y) = c.split_at(c.len() / 2);
+            let (a, b) = self.join(|| work(x), || work(y));
+            sum += a + b;
+        }
+        sum
+    }
+
+    fn join(&self, a: impl FnOnce() -> f64 + Send, b: impl FnOnce() -> f64 + Send) -> (f64, f64) {
+        if self.rayon {
+            rayon::join(a, b)
+        } else {
+            crate::par::join(a, b)
+        }
+    }
+
+    /// How deep the splits go (1: one split).
+    #[cfg(test)]
+    pub(crate) fn depth(&self) -> usize {
+        1 + self.first.depth().max(self.second.depth())
+    }
+}
+
+impl Part {
+    /// The part's stencils, in the assembly's order.
+    pub(crate) fn order(&self) -> Box<dyn Iterator<Item = usize> + '_> {
+        match self {
+            Part::Leaf(list) => Box::new(list.iter().copied()),
+            Part::Split(halves) => halves.order(),
+        }
+    }
+
+    /// How many stencils the part holds.
+    #[cfg(test)]
+    pub(crate) fn len(&self) -> usize {
+        self.order().count()
+    }
+
+    fn run(&self, work: &(impl Fn(&[usize]) -> f64 + Sync)) -> f64 {
+        match self {
+            Part::Leaf(list) => work(list),
+            Part::Split(halves) => halves.run(work),
+        }
+    }
+
+    #[cfg(test)]
+    fn depth(&self) -> usize {
+        match self {
+            Part::Leaf(_) => 0,
+            Part::Split(halves) => halves.depth(),
+        }
     }
 }
 
