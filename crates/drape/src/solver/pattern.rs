@@ -411,6 +411,10 @@ struct Stencils<'n, 's> {
     list: Vec<&'s [usize]>,
     colour: Vec<usize>,
     colours: usize,
+    /// Per node, the sides of the split at hand that touch it (bit 0:
+    /// first, bit 1: second); zero between splits, so that a split costs
+    /// its own stencils, not the mesh's nodes.
+    touched: std::cell::RefCell<Vec<u8>>,
 }
 
 impl Halves {
@@ -459,6 +463,7 @@ impl Halves {
             list,
             colour,
             colours: colours.len(),
+            touched: std::cell::RefCell::new(vec![0; nodes.len()]),
         };
         let all: Vec<usize> = (0..set.list.len()).collect();
         // The whole mesh is split along the extent of all its nodes.
@@ -507,17 +512,24 @@ impl Halves {
         for &k in &by_position[count / 2..] {
             side[k] = 1;
         }
-        // Nodes touched by each side (bit 0: first, bit 1: second).
-        let mut touched = vec![0u8; set.nodes.len()];
-        for (k, &e) in subset.iter().enumerate() {
-            for &a in set.list[e] {
-                touched[a] |= 1 << side[k];
+        let at_interface: Vec<bool> = {
+            let mut touched = set.touched.borrow_mut();
+            for (k, &e) in subset.iter().enumerate() {
+                for &a in set.list[e] {
+                    touched[a] |= 1 << side[k];
+                }
             }
-        }
-        let at_interface: Vec<bool> = subset
-            .iter()
-            .map(|&e| set.list[e].iter().any(|&a| touched[a] == 3))
-            .collect();
+            let flags = subset
+                .iter()
+                .map(|&e| set.list[e].iter().any(|&a| touched[a] == 3))
+                .collect();
+            for &e in subset {
+                for &a in set.list[e] {
+                    touched[a] = 0;
+                }
+            }
+            flags
+        };
         let (mut first, mut second) = (Vec::new(), Vec::new());
         let mut interface = vec![Vec::new(); set.colours];
         for (k, &e) in subset.iter().enumerate() {
