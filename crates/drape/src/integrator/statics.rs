@@ -58,7 +58,18 @@
 //! forces. As `tau` grows the pseudo-steps become Newton's, and converge
 //! as fast. A pseudo-step need only carry the fabric nearer to rest, so it
 //! is solved inexactly (`RELAX_TOLERANCE`); the one whose solution ends
-//! the increment is solved again from there to Newton's tolerances.
+//! the increment is solved again from there to Newton's tolerances. For
+//! the same reason a pseudo-step cut at its iterations while creeping to
+//! its end (its last increment within `RELAX_KEEP`) is kept where its
+//! energy fell, as an inexact proximal step (a sufficient decrease of
+//! `Pi`: Rockafellar 1976, "Monotone operators and the proximal point
+//! algorithm", SIAM J. Control Optim. 14): its last iterate is the next
+//! anchor, and `tau` is cut as after a failure. A pseudo-step cut further
+//! from its end (across a fold) is repeated shorter: kept as well, such
+//! steps led the relaxed settle of `tests/relaxation.rs` to rest states
+//! of a potential 1–2.5 % higher than the fine loading path's
+//! (docs/performance.md, "Pseudo-steps kept, and the direct solve's
+//! accuracy").
 //! With friction, each of the increment's rounds is relaxed alike:
 //! within a round the friction term is an energy (the stick round's
 //! springs, or the friction lagged at the previous round's solution), so
@@ -245,6 +256,12 @@ const RELAX_ITERATIONS: usize = 100;
 /// again from there to `[solver] tolerance`, so an increment's result is
 /// as converged as before (docs/performance.md, "Inexact pseudo-steps").
 const RELAX_TOLERANCE: f64 = 1e-6;
+/// The last Newton increment (`|dY| / L`) within which a pseudo-step cut
+/// at [`RELAX_ITERATIONS`] is kept when its energy fell: a hundred times
+/// [`RELAX_TOLERANCE`], a pseudo-step creeping to its end (measured on
+/// the library's M2: cut at 1e-5, against 1e-4 to 2e-3 for the
+/// pseudo-steps across a fold, which are repeated shorter).
+const RELAX_KEEP: f64 = 1e-4;
 /// The shortest `tau`, relative to the first, before relaxing gives up.
 const RELAX_SHORTEST: f64 = 1e-6;
 
@@ -327,6 +344,28 @@ fn solve_increment(
             }
             Ok(solved) if tau.is_infinite() => return Ok(solved),
             Err(e) => {
+                // A pseudo-step cut at its iterations when it was all but
+                // solved, downhill, is kept (module docs): its last
+                // iterate is the next anchor, its iterations count.
+                if !polishing
+                    && let NewtonError::NotConverged {
+                        iterations,
+                        increment,
+                        ..
+                    } = e
+                    && increment <= RELAX_KEEP
+                    && newton.descent.is_some_and(|(first, last)| last < first)
+                {
+                    let kept = NewtonReport {
+                        iterations,
+                        ..super::empty_report()
+                    };
+                    total = Some(merge_reports(total, kept));
+                    anchor.copy_from_slice(y);
+                    if let (Some(cm), Some(state)) = (model.contact(), contact.as_mut()) {
+                        cm.refresh_features(y, base.time, state);
+                    }
+                }
                 // A polish that fails (it starts at a loose solution
                 // near rest, so it should not) counts as the pseudo-step's
                 // failure: `y` is reset to the solution before.

@@ -322,6 +322,12 @@ pub struct NewtonWorkspace {
     /// [`NewtonError::Interrupted`] (issue 46: a step that never ends
     /// must not hold a Ctrl-C back).
     pub interrupt: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+    /// The last solve's energy at its first guess and at its last
+    /// iterate, when its system has a finite energy throughout and was
+    /// not revised in between: whether a solve that did not converge
+    /// still went downhill (a relaxed pseudo-step keeps such an iterate,
+    /// `integrator::statics`).
+    pub descent: Option<(f64, f64)>,
 }
 
 /// The progressively projected Newton's state over one solve: the
@@ -380,6 +386,7 @@ impl NewtonWorkspace {
             ppn: Progressive::default(),
             woodbury: Woodbury::default(),
             interrupt: None,
+            descent: None,
         }
     }
 }
@@ -809,7 +816,13 @@ pub fn solve(
     // The residual beyond which the iteration has diverged.
     let diverged_above = 1e8 * r0.max(eval.scale);
     let mut increment = f64::INFINITY;
+    ws.descent = eval.energy.filter(|e| e.is_finite()).map(|e| (e, e));
     loop {
+        // The energy at the iterate (a revised system's is not comparable).
+        ws.descent = match (ws.descent, eval.energy) {
+            (Some((first, _)), Some(e)) if e.is_finite() => Some((first, e)),
+            _ => None,
+        };
         let it = report.iterations + report.chord_steps;
         interrupted(ws, it)?;
         if ended(
@@ -899,6 +912,7 @@ pub fn solve(
             // and no step of the old one counts towards convergence.
             eval = system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]));
             have_hessian = true;
+            ws.descent = None;
             residual = eval.merit.unwrap_or_else(|| norm(&ws.g));
             report.residuals.push(residual);
             increment = f64::INFINITY;
@@ -1147,6 +1161,41 @@ mod tests {
         let r = &report.residuals;
         let n = r.len();
         assert!(r[n - 1] <= 10.0 * r[n - 2].powi(2) + 1e-300, "{r:?}");
+    }
+
+    /// `ws.descent` after a solve cut at its iterations: the energy at the
+    /// first guess and at the last iterate, the second below the first
+    /// (the energy's line search only goes downhill); none for a system
+    /// without an energy.
+    #[test]
+    fn a_solve_cut_short_says_whether_it_went_downhill() {
+        let settings = NewtonSettings {
+            chord_steps: 0,
+            max_iterations: 3,
+            ..NewtonSettings::default()
+        };
+        let start: [f64; 3] = [20.0, -15.0, 8.0];
+        let first: f64 = start.iter().map(|v| (1.0 + v * v).sqrt()).sum();
+        for with_energy in [true, false] {
+            let mut system = Hyperbola {
+                with_energy,
+                energies: Vec::new(),
+            };
+            let (mut y, mut ws) = (start, workspace());
+            let e = solve(&mut system, &mut y, 1.0, &settings, &mut ws).unwrap_err();
+            assert!(
+                matches!(e, NewtonError::NotConverged { iterations: 3, .. }),
+                "{e}"
+            );
+            if with_energy {
+                let (e0, e1) = ws.descent.expect("an energy throughout");
+                let last: f64 = y.iter().map(|v| (1.0 + v * v).sqrt()).sum();
+                assert_eq!((e0, e1), (first, last));
+                assert!(e1 < e0, "{e0} {e1}");
+            } else {
+                assert_eq!(ws.descent, None);
+            }
+        }
     }
 
     /// `E(y) = sum_i (y_i^2 - 1)^2 / 4`, a double well in each component:
