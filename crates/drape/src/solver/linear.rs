@@ -287,7 +287,8 @@ pub struct LinearSolver {
     /// Counts since the solver was made.
     pub stats: LinearStats,
     /// Relative residual the Krylov solves stop at (default 1e-12); Newton
-    /// loosens it while far from the solution (inexact Newton).
+    /// loosens it while far from the solution (inexact Newton). A direct
+    /// solution is accepted up to the larger of this and 1e-6.
     pub krylov_tolerance: f64,
     /// How systems are solved.
     mode: LinearMode,
@@ -897,8 +898,8 @@ impl LinearSolver {
         // refinement stalls just above 1e-6 (a relaxed pseudo-step of a
         // fine level, whose `K + M / tau^2` lost its digits) would
         // otherwise fail Newton at its first iteration, where a direction
-        // accurate to 1e-4 serves as well (docs/performance.md, "The
-        // direct solve's accuracy").
+        // accurate to 1e-4 serves as well (docs/performance.md,
+        // "Pseudo-steps kept, and the direct solve's accuracy").
         let bound = 1e-6f64.max(self.krylov_tolerance);
         if residual.is_nan() || (used.is_direct() && residual > bound * b_norm) {
             return Err(SolveFailure::Residual {
