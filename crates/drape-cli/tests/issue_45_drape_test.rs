@@ -163,12 +163,25 @@ fn seeds_and_statistics() {
             "status",
             "drape_coefficient",
             "folds",
+            "crossings",
             "wall_seconds",
         ] {
             assert!(s.get(key).is_some(), "a specimen lacks {key}");
         }
         assert_eq!(s["status"], "completed");
     }
+    // A specimen crossing itself is named in the message, and only then.
+    let crossing = a["specimens"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|s| s["crossings"].as_u64().unwrap() > 0);
+    let message = a["message"].as_str().unwrap();
+    assert_eq!(
+        message.contains("through each other"),
+        crossing,
+        "{message}"
+    );
     let r = results(&a);
     let n = r.len() as f64;
     let mean = r.iter().map(|x| x.0).sum::<f64>() / n;

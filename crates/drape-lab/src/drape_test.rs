@@ -167,6 +167,8 @@ pub fn report(out: &Path, test: &TestInfo, outcomes: &[Outcome]) -> anyhow::Resu
     let mut samples = Vec::new();
     let mut shadows = Vec::new();
     let mut radii = None;
+    // The measured specimens whose rest state crosses itself, and how often.
+    let mut crossing = Vec::new();
     for plan in test.plans {
         let dir = specimen_dir(out, plan);
         let outcome = outcomes.iter().find(|o| o.index == plan.index);
@@ -174,14 +176,18 @@ pub fn report(out: &Path, test: &TestInfo, outcomes: &[Outcome]) -> anyhow::Resu
             Some(o) => (o.status.clone(), o.message.clone()),
             None => ("interrupted".to_string(), "not started".to_string()),
         };
-        let (mut dc, mut folds) = (Value::Null, Value::Null);
+        let (mut dc, mut folds, mut crossings) = (Value::Null, Value::Null, Value::Null);
         if status == "completed" {
             match measure_last(&dir) {
                 Ok(m) => {
                     let f = m.measurement.folds;
                     let d = m.measurement.drape_coefficient;
+                    let c = m.measurement.crossings;
                     samples.push((d, f));
-                    (dc, folds) = (json!(d), json!(f));
+                    (dc, folds, crossings) = (json!(d), json!(f), json!(c));
+                    if c > 0 {
+                        crossing.push((plan.index, c));
+                    }
                     radii.get_or_insert((m.tester.pedestal_radius, m.tester.specimen_radius));
                     shadows.push((plan.index, m.measurement.outline));
                 }
@@ -208,6 +214,7 @@ pub fn report(out: &Path, test: &TestInfo, outcomes: &[Outcome]) -> anyhow::Resu
             "status": status,
             "drape_coefficient": dc,
             "folds": folds,
+            "crossings": crossings,
             "wall_seconds": wall,
             "message": message,
             "seed": plan.spec.seed,
@@ -233,7 +240,7 @@ pub fn report(out: &Path, test: &TestInfo, outcomes: &[Outcome]) -> anyhow::Resu
         "dc_at_modal_folds": e.dc_at_modal_folds,
         "pedestal_radius": radii.map(|r| r.0),
         "specimen_radius": radii.map(|r| r.1),
-        "message": words(&e, test.plans.len()),
+        "message": words(&e, test.plans.len()) + &crossing_words(&crossing),
     });
     let json_path = out.join(TEST_JSON);
     let mut text = serde_json::to_string_pretty(&value)?;
@@ -282,9 +289,46 @@ pub fn words(e: &Ensemble, count: usize) -> String {
     }
 }
 
+/// The specimens `(number, crossings)` whose final frame crosses itself,
+/// in words for `test.json`'s `message` (empty when none does): their
+/// folds pass through each other, a rest state self-contact forbids.
+fn crossing_words(crossing: &[(usize, usize)]) -> String {
+    if crossing.is_empty() {
+        return String::new();
+    }
+    let list: Vec<String> = crossing
+        .iter()
+        .map(|&(i, c)| format!("{i} ({c} crossing{})", if c == 1 { "" } else { "s" }))
+        .collect();
+    let (who, verb, whose) = if crossing.len() == 1 {
+        ("specimen", "crosses itself", "its")
+    } else {
+        ("specimens", "cross themselves", "their")
+    };
+    format!(
+        "; {who} {} {verb}: {whose} folds pass through each other (`[contact] self = true` forbids it)",
+        list.join(", ")
+    )
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{Prior, prior};
+    use super::{Prior, crossing_words, prior};
+
+    /// A test whose specimens all stay clear of themselves says nothing
+    /// more; one that crosses itself is named with its count.
+    #[test]
+    fn specimens_crossing_themselves_are_named() {
+        assert_eq!(crossing_words(&[]), "");
+        assert_eq!(
+            crossing_words(&[(2, 24)]),
+            "; specimen 2 (24 crossings) crosses itself: its folds pass through each other (`[contact] self = true` forbids it)"
+        );
+        assert_eq!(
+            crossing_words(&[(0, 1), (3, 5)]),
+            "; specimens 0 (1 crossing), 3 (5 crossings) cross themselves: their folds pass through each other (`[contact] self = true` forbids it)"
+        );
+    }
 
     /// What a specimen's directory holds decides what a test run again
     /// does with it: a completed run is kept, an interrupted one and a

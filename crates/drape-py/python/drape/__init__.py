@@ -133,8 +133,8 @@ def test(
 
     Returns:
         ``test.json`` as a dict: ``specimens`` (each ``specimen``,
-        ``status``, ``drape_coefficient``, ``folds``, ``wall_seconds``,
-        ``message`` and its perturbation), ``mean``, ``sd``, ``ci95``,
+        ``status``, ``drape_coefficient``, ``folds``, ``crossings``,
+        ``wall_seconds``, ``message`` and its perturbation), ``mean``, ``sd``, ``ci95``,
         ``fold_histogram``, ``modal_folds``, ``dc_at_modal_folds``,
         ``measured`` of ``count``.
 
