@@ -54,8 +54,9 @@ for s in t["specimens"]:
     levels = levels[levels.find("; ") + 2:] if "; " in levels else levels
     dc = s.get("drape_coefficient")
     dc = "-" if dc is None else f"{dc:.4f}"
+    crossed = f", {s['crossings']} crossings" if s.get("crossings") else ""
     print(f"  specimen {s['specimen']}: {s['status']}, DC {dc}, "
-          f"{s.get('folds')} folds, {levels}")
+          f"{s.get('folds')} folds{crossed}, {levels}")
 PY
 }
 
