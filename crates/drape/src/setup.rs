@@ -120,6 +120,11 @@ pub struct Refine {
     /// The drape coefficient change between two levels below which the
     /// run stops refining.
     pub tolerance: f64,
+    /// Elements per gravity bending length a level's mesh must have
+    /// before `tolerance` may stop the refinement (its mean edge at most
+    /// `l / resolution`, [`crate::levels::resolved`]); 0: no such
+    /// condition.
+    pub resolution: f64,
     /// Dörfler's bulk share of the curvature indicator, in (0, 1].
     pub fraction: f64,
     /// The marking ranks the triangles by the chord indicator (the

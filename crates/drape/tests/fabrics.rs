@@ -39,7 +39,8 @@ fn every_fabric_of_the_library_builds() {
 /// docs/fabrics.md): each file gives its fabric in KES units, and what
 /// drape reads from it is the table's — the bending length
 /// `(B / (W g))^(1/3)` the transcription lists (2.12, 1.60, 1.88 and 1.22
-/// cm, to its rounding of 0.005 cm), and the weight `W g` per area.
+/// cm, to its rounding of 0.005 cm; also as `Model::bending_length`
+/// finds it for `[refine] resolution`), and the weight `W g` per area.
 #[test]
 fn the_matsudaira_files_carry_the_published_bending_lengths() {
     use drape::scenario::Scenario;
@@ -61,6 +62,10 @@ fn the_matsudaira_files_carry_the_published_bending_lengths() {
             (areal - 0.01 * w_mg_cm2).abs() < 1e-12,
             "{name}: {areal} kg/m²"
         );
+        // The bending length the refinement's `resolution` counts in.
+        let built = s.build(&file, &text).unwrap_or_else(|e| panic!("{e}"));
+        let l = built.model.bending_length().unwrap() * 100.0;
+        assert!((l - c_cm).abs() <= 0.005, "{name}: bending length {l} cm");
         let b = s.material.bending_rigidity.as_ref().unwrap();
         for direction in ["warp", "weft"] {
             let rigidity = b[direction].as_float().unwrap();

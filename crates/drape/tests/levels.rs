@@ -338,6 +338,74 @@ fn the_rim_and_the_contact_line_are_refined_when_asked() {
     assert!(contact >= 24 + none, "{contact} against {none}");
 }
 
+/// `[refine] resolution`: the tolerance ends the refinement only on a
+/// mesh that resolves the fabric's gravity bending length. The tester's
+/// fabric: `l = (B / w)^(1/3)` with `B` = 2e-5 N m and `w` = 1.8816 N/m²
+/// (its surface load), 22.0 mm. Refined everywhere with a tolerance any
+/// change meets, the run stops after its first refinement; asked for a
+/// mean edge between the second refinement's and the first's, it goes
+/// on to the second and stops there; asked for one finer than the last
+/// mesh it may make, it says it did not converge.
+#[test]
+fn the_tolerance_waits_for_a_mesh_that_resolves_the_bending_length() {
+    let uniform = |resolution: Option<f64>| {
+        let extra = resolution.map_or(String::new(), |r| format!("\nresolution = {r}"));
+        tester().replace(
+            "levels = 2\ntolerance = 0.0",
+            &format!("levels = 2\ntolerance = 1.0\nwhere = \"all\"{extra}"),
+        )
+    };
+    let text = uniform(None);
+    let path = Path::new("test.toml");
+    let built = Scenario::parse(&text, path)
+        .unwrap()
+        .build(path, &text)
+        .unwrap();
+    let l = built.model.bending_length().unwrap();
+    let closed = (2.0e-5f64 / 1.8816).cbrt();
+    assert!((l - closed).abs() < 1e-12 * closed, "{l} against {closed}");
+    // The mean edges of the meshes a uniform refinement makes.
+    let mut meshes = vec![built.model.mesh().clone()];
+    for _ in 0..2 {
+        let last = meshes.last().unwrap();
+        let all = vec![true; last.element_count()];
+        meshes.push(Transfer::new(last, &all, &[]).unwrap().refinement.mesh);
+    }
+    let h: Vec<f64> = meshes.iter().map(levels::mean_edge).collect();
+    assert!(h[0] > h[1] && h[1] > h[2], "{h:?}");
+    let run = |text: &str| {
+        let dir = temp_dir("levels-resolution");
+        run_levels(text, &dir, RunControl::default(), &mut |_| {}).unwrap()
+    };
+    let plain = run(&text);
+    assert_eq!(plain.levels.len(), 2, "{}", plain.message);
+    assert!(
+        plain.message.ends_with("refine.tolerance"),
+        "{}",
+        plain.message
+    );
+    let waits = run(&uniform(Some(l / (0.5 * (h[1] + h[2])))));
+    assert_eq!(waits.levels.len(), 3, "{}", waits.message);
+    assert!(
+        waits.message.ends_with("refine.tolerance"),
+        "{}",
+        waits.message
+    );
+    // Up to its second level, the run is the plain one.
+    assert_eq!(
+        waits.levels[1].drape_coefficient,
+        plain.levels[1].drape_coefficient
+    );
+    let coarse = run(&uniform(Some(l / (0.5 * h[2]))));
+    assert_eq!(coarse.levels.len(), 3, "{}", coarse.message);
+    let asked = format!(
+        "mean edge {:.2} mm against {:.2} mm): not converged",
+        1e3 * h[2],
+        0.5e3 * h[2]
+    );
+    assert!(coarse.message.ends_with(&asked), "{}", coarse.message);
+}
+
 /// Each key out of its range, and a mesh of order 2, refused by name.
 #[test]
 fn bad_refine_keys_are_refused_by_name() {
@@ -359,6 +427,7 @@ fn bad_refine_keys_are_refused_by_name() {
     );
     at("levels = 5", 0, "refine.levels", &["not 5"]);
     at("tolerance = -0.1", 0, "refine.tolerance", &[">= 0", "-0.1"]);
+    at("resolution = -4.0", 0, "refine.resolution", &[">= 0", "-4"]);
     at("fraction = 0.0", 0, "refine.fraction", &["(0, 1]", "not 0"]);
     at("fraction = 1.5", 0, "refine.fraction", &["not 1.5"]);
     let t6 = base.replace("[mesh]", "[mesh]\norder = 2");
@@ -384,6 +453,11 @@ fn bad_refine_keys_are_refused_by_name() {
     refused("where = \"everywhere\"", &["everywhere", "all"]);
     refused("indicator = \"sag\"", &["sag", "bending", "chord"]);
     refused("also = [\"rim\", \"hem\"]", &["hem", "rim", "contact"]);
+    // Elements per bending length, of a fabric without one.
+    refused(
+        "resolution = 4.0",
+        &["refine.resolution", "bending rigidity", "weight"],
+    );
     let _ = setup(&format!("{base}\n[refine]\nlevels = 3\nwhere = \"all\"\n"));
     let _ = setup(&format!("{base}\n[refine]\nindicator = \"chord\"\n"));
     let _ = setup(&format!(

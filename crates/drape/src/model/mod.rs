@@ -472,6 +472,37 @@ impl Model {
         self.density
     }
 
+    /// The gravity bending length `l = (B / w)^(1/3)` of the fabric (m;
+    /// Peirce 1930, the length over which the fabric's weight bends it, and
+    /// the scale of a fold's crest: Cerda, Mahadevan & Pasini 2004): `B` its
+    /// smaller bending rigidity (N m; a woven fabric's warp or weft, a
+    /// plate's `D`), `w` the magnitude of its dead weight per area (N/m²:
+    /// `rho t g` of the gravity loads plus the surface loads). `None` without
+    /// bending or without such a load.
+    pub fn bending_length(&self) -> Option<f64> {
+        use crate::bending::BendingRigidity;
+        use crate::load::LoadKind;
+        let b = match self.bending()?.rigidity {
+            BendingRigidity::Isotropic(b) => b,
+            BendingRigidity::Woven { warp, weft, .. } => warp.min(weft),
+            BendingRigidity::Plate { rigidity, .. } => rigidity,
+        };
+        let areal_mass = self.density * self.section.thickness;
+        let mut q = [0.0; 3];
+        for load in &self.loads {
+            let (scale, v) = match &load.kind {
+                LoadKind::Gravity { acceleration } => (areal_mass, acceleration),
+                LoadKind::Surface { force } => (1.0, force),
+                _ => continue,
+            };
+            for (qi, vi) in q.iter_mut().zip(v) {
+                *qi += scale * vi;
+            }
+        }
+        let w = crate::vec3::norm(q);
+        (b > 0.0 && w > 0.0).then(|| (b / w).cbrt())
+    }
+
     /// External loads.
     pub fn loads(&self) -> &[Load] {
         &self.loads

@@ -42,6 +42,19 @@ impl Scenario {
         let mesh = build_mesh(&c, &self.mesh, &base, &mut inputs)?;
         let refine = build_refine(&c, self, &mesh)?;
         let mut setup = self.build_on(file, source, mesh, inputs, None)?;
+        if let Some(r) = refine.filter(|r| r.resolution > 0.0)
+            && setup.model.bending_length().is_none()
+        {
+            return Err(c.invalid(
+                "refine",
+                None,
+                "resolution",
+                format!(
+                    "= {} counts elements per gravity bending length (B / w)^(1/3), and this fabric has none: it needs a bending rigidity (material.bending_rigidity, or [material.kes] B) and a weight (a gravity or surface load); leave resolution out without them",
+                    r.resolution
+                ),
+            ));
+        }
         setup.refine = refine;
         Ok(setup)
     }
@@ -225,6 +238,17 @@ fn build_refine(c: &Checker, s: &Scenario, mesh: &Mesh) -> Result<Option<Refine>
             ),
         ));
     }
+    if !(r.resolution.is_finite() && r.resolution >= 0.0) {
+        return Err(c.invalid(
+            t,
+            None,
+            "resolution",
+            format!(
+                "must be a number of elements per bending length >= 0 (0: none asked), not {}",
+                r.resolution
+            ),
+        ));
+    }
     if !(r.fraction > 0.0 && r.fraction <= 1.0) {
         return Err(c.invalid(
             t,
@@ -251,6 +275,7 @@ fn build_refine(c: &Checker, s: &Scenario, mesh: &Mesh) -> Result<Option<Refine>
         levels: r.levels,
         uniform: r.region == RefineWhere::All,
         tolerance: r.tolerance,
+        resolution: r.resolution,
         fraction: r.fraction,
         chord: r.indicator == RefineIndicator::Chord,
         rim: r.also.contains(&RefineAlso::Rim),

@@ -663,6 +663,15 @@ pub struct RefineSpec {
     /// refines `levels` times.
     #[serde(default = "default_refine_tolerance")]
     pub tolerance: f64,
+    /// Elements per gravity bending length `l = (B / w)^(1/3)` (`B` the
+    /// smaller bending rigidity, `w` the weight per area) that a level's
+    /// mesh must have before `tolerance` may stop the refinement: its
+    /// mean edge at most `l / resolution`. >= 0; default 0 (no such
+    /// condition). A mesh too coarse to fold the fabric changes its drape
+    /// coefficient little from one level to the next and would otherwise
+    /// pass for converged (docs/validation.md, Matsudaira F).
+    #[serde(default)]
+    pub resolution: f64,
     /// `"folds"`: the triangles split are the fewest that hold this
     /// share of the curvature indicator (Dörfler's bulk criterion), in
     /// (0, 1]; default 0.7.
