@@ -328,10 +328,9 @@ pub fn mean_edge(mesh: &crate::mesh::Mesh) -> f64 {
 /// `l` ([`crate::model::Model::bending_length`]) with `resolution` elements: its
 /// [`mean_edge`] `h <= l / resolution`. A fold's crest bends the fabric
 /// over a few `l`; a mesh much coarser cannot follow it, folds the fabric
-/// fewer times and stiffer, and changes its drape coefficient little
-/// from one such level to the next (docs/validation.md: Matsudaira F,
-/// `l` = 12 mm, 80.9 % and 80.8 % in 3 folds on meshes of 10 and 6 mm,
-/// 41.9 % in 7 folds once they are 3 mm). `Ok` when `resolution` is 0
+/// fewer times and stiffer, and can change its drape coefficient less
+/// than the tolerance from one such level to the next (docs/validation.md,
+/// "The faille (F), and a convergence that was not one"). `Ok` when `resolution` is 0
 /// (nothing asked) or the mesh resolves it; else `Err((h, l /
 /// resolution))`, the mean edge and the edge asked for (m).
 pub fn resolved(model: &crate::model::Model, resolution: f64) -> Result<(), (f64, f64)> {
