@@ -134,9 +134,9 @@ def test(
     Returns:
         ``test.json`` as a dict: ``specimens`` (each ``specimen``,
         ``status``, ``drape_coefficient``, ``folds``, ``crossings``,
-        ``wall_seconds``, ``message`` and its perturbation), ``mean``, ``sd``, ``ci95``,
-        ``fold_histogram``, ``modal_folds``, ``dc_at_modal_folds``,
-        ``measured`` of ``count``.
+        ``wall_seconds``, ``message`` and its perturbation), ``mean``,
+        ``sd``, ``ci95``, ``fold_histogram``, ``modal_folds``,
+        ``dc_at_modal_folds``, ``measured`` of ``count``.
 
     Raises:
         ScenarioError: the scenario or its ``[test]`` table (nothing ran).
