@@ -11,8 +11,9 @@
 //! hangs, the green splits of the level before undone where the split
 //! reaches them so that no triangle is halved twice
 //! ([`crate::mesh::refine`]) —; the state is carried onto the new
-//! mesh with its new nodes on the surface ([`transfer`]); the scenario is
-//! built again on the new mesh, by the one path every term follows
+//! mesh with its new nodes on the surface, or on their chords where the
+//! surface would compress an element more than the coarse state has
+//! ([`transfer`]); the scenario is built again on the new mesh, by the one path every term follows
 //! ([`Scenario::build_level`]: supports, loads, monitors, mass, bending
 //! patches, contact and the Hessian's layout all made from the mesh), as
 //! a static analysis of one load increment at the full load; and that
@@ -223,7 +224,7 @@ pub fn run_with(
             k + 1,
         )
         .map_err(failed)?;
-        let state = carry(&next, &transfer, &finished.state);
+        let state = carry(&next, &transfer, &finished.state, model);
         let mut counters = finished.counters;
         counters.wall_seconds += since.elapsed().as_secs_f64();
         start = Some(LevelStart {
@@ -293,12 +294,31 @@ fn build_level(
 /// the load, in another fold pattern).
 pub const LEVEL_ITERATIONS: usize = 200;
 
-/// The state `coarse` carried onto `fine`'s mesh by `transfer`, at rest
-/// (a static level), its time, work and friction dissipation kept; a new
-/// node held by a support at its reference position.
-fn carry(fine: &Setup, transfer: &Transfer, coarse: &State) -> State {
+/// The state `coarse` (on `coarse_model`'s mesh) carried onto `fine`'s
+/// mesh by `transfer`, at rest (a static level), its time, work and
+/// friction dissipation kept; a new node held by a support at its
+/// reference position. The new nodes go on the surface
+/// ([`transfer`]), but not where that compresses a fine element more
+/// than the coarse state compresses any of its own (its least principal
+/// stretch, or 1): across a fold of the coarse level the surface's
+/// quadratic overshoots, and the new nodes of such elements go back on
+/// their chords ([`Transfer::onto_chords`]). Measured on Matsudaira B's
+/// third specimen on ISO's geometry (docs/validation.md): the surface
+/// alone carried a coarse state whose least stretch was 0.996 into one
+/// of 0.071 on the fine mesh (31 elements below Saint-Venant–Kirchhoff's
+/// stable `1/sqrt(3)`), which a finer level's settle may keep collapsed.
+fn carry(
+    fine: &Setup,
+    transfer: &Transfer,
+    coarse: &State,
+    coarse_model: &crate::model::Model,
+) -> State {
     let model = &fine.model;
     let mut positions = transfer.carry(&coarse.positions);
+    let floor = coarse_model.min_stretch(&coarse.positions).0.min(1.0);
+    transfer.onto_chords(&coarse.positions, &mut positions, |y| {
+        model.elements_compressed_below(y, floor)
+    });
     let reference = model.initial_positions();
     for (i, held) in model.fixed().iter().enumerate() {
         if *held && i >= coarse.positions.len() {

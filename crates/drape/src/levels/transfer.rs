@@ -20,6 +20,17 @@
 //! unstrained where the coarse one was (no spurious energy). A quadratic
 //! surface is carried over exactly. The coarse nodes keep their values.
 //!
+//! **Across a fold** the quadratic fitted on the flat reference
+//! overshoots: the nodes around a coarse edge that a fold crosses lie on
+//! two sheets, and the weights put its new node off both, compressing
+//! the fine triangles beside it (to a stretch of 0.07 from a coarse state
+//! whose least was 0.996, measured). [`Transfer::onto_chords`] puts such
+//! elements' new nodes back on the middle of their chords, where a fine
+//! triangle is a piece of its coarse one and strained as it is (away
+//! from the rim: `onto_chords`); the multilevel settle does so wherever
+//! the fine state would be more compressed than the coarse one
+//! ([`super`]'s `carry`).
+//!
 //! **The rim.** A boundary edge has one triangle and no fit across it;
 //! its new node is put on the curve through the boundary nodes around it
 //! instead ([`rim_midpoints`]): the cubic through the edge's ends and the
@@ -116,6 +127,49 @@ impl Transfer {
             coarse,
             rules,
         })
+    }
+
+    /// `fine`, the positions `values` carried by [`Transfer::carry`], with
+    /// the new nodes of the elements `compressed` names put back on the
+    /// middle of the coarse chord each halves, asked again until it names
+    /// no element with a new node off its chord. On the chords the fine
+    /// triangles of a split are pieces of their coarse one, strained as it
+    /// is — but for a green-split parent's middle triangle, which straddles
+    /// the two halves, and beside the rim, whose new reference nodes lie on
+    /// its curve: there the chord is shorter by its sag, about `h / 4R`
+    /// of an edge `h` on a rim of radius `R`. Returns how many new nodes were moved: none for a
+    /// refinement of higher order, whose new nodes halve no chord.
+    pub fn onto_chords(
+        &self,
+        values: &[f64],
+        fine: &mut [f64],
+        mut compressed: impl FnMut(&[f64]) -> Vec<usize>,
+    ) -> usize {
+        let mesh = &self.refinement.mesh;
+        let mut on_chord = vec![false; self.refinement.midpoints.len()];
+        let mut moved = 0;
+        loop {
+            let before = moved;
+            for e in compressed(fine) {
+                for &node in mesh.element(e) {
+                    let Some(j) = node.checked_sub(self.coarse) else {
+                        continue;
+                    };
+                    if j >= on_chord.len() || on_chord[j] {
+                        continue;
+                    }
+                    on_chord[j] = true;
+                    moved += 1;
+                    let [a, b] = self.refinement.midpoints[j];
+                    for i in 0..3 {
+                        fine[3 * node + i] = 0.5 * (values[3 * a + i] + values[3 * b + i]);
+                    }
+                }
+            }
+            if moved == before {
+                return moved;
+            }
+        }
     }
 
     /// The field `values` of the coarse mesh (3 per node: positions or
@@ -435,5 +489,113 @@ mod tests {
                 Err(TransferError::Adaptive(_))
             ));
         }
+    }
+
+    /// The smallest principal stretch of each linear triangle of `mesh`
+    /// (flat in z = 0) at the positions `x`.
+    fn least_stretches(mesh: &Mesh, x: &[f64]) -> Vec<f64> {
+        mesh.elements()
+            .map(|t| {
+                let p = |k: usize| mesh.nodes[t[k]];
+                let y = |k: usize| [x[3 * t[k]], x[3 * t[k] + 1], x[3 * t[k] + 2]];
+                let e = [
+                    [p(1)[0] - p(0)[0], p(2)[0] - p(0)[0]],
+                    [p(1)[1] - p(0)[1], p(2)[1] - p(0)[1]],
+                ];
+                let det = e[0][0] * e[1][1] - e[0][1] * e[1][0];
+                let inv = [
+                    [e[1][1] / det, -e[0][1] / det],
+                    [-e[1][0] / det, e[0][0] / det],
+                ];
+                // F = [y1 - y0, y2 - y0] E^-1 (3 x 2), then C = F^T F.
+                let g: [[f64; 2]; 3] =
+                    std::array::from_fn(|i| [y(1)[i] - y(0)[i], y(2)[i] - y(0)[i]]);
+                let f: [[f64; 2]; 3] = std::array::from_fn(|i| {
+                    std::array::from_fn(|j| g[i][0] * inv[0][j] + g[i][1] * inv[1][j])
+                });
+                let c = |a: usize, b: usize| (0..3).map(|i| f[i][a] * f[i][b]).sum::<f64>();
+                let (tr, dt) = (c(0, 0) + c(1, 1), c(0, 0) * c(1, 1) - c(0, 1) * c(0, 1));
+                (0.5 * (tr - (tr * tr - 4.0 * dt).max(0.0).sqrt()))
+                    .max(0.0)
+                    .sqrt()
+            })
+            .collect()
+    }
+
+    /// A disc rolled tightly (the fold of a draped specimen's coarse
+    /// level, measured there: 0.996 carried into 0.071): the surface
+    /// placement overshoots across the fold and compresses fine triangles below the coarse
+    /// state's least stretch. `onto_chords` puts back on their chords the
+    /// new nodes of those triangles, and only those, until every fine
+    /// triangle away from the rim is as stretched as the coarse state's
+    /// least (refined everywhere, each fine triangle with its new nodes on
+    /// the chords is a quarter of its coarse one, strained alike).
+    #[test]
+    fn a_carry_that_compresses_is_put_back_on_the_chords() {
+        let disc = generate::disc(0.1, 6, [0.0; 3], ElementOrder::Linear);
+        let t = Transfer::new(&disc, &vec![true; disc.element_count()], &[]).unwrap();
+        let fine = &t.refinement.mesh;
+        // Rolled onto a cylinder of radius 2 cm, about an edge's length:
+        // an isometry, which the coarse elements meet as chords of arcs.
+        let r = 0.02;
+        let folded: Vec<f64> = disc
+            .nodes
+            .iter()
+            .flat_map(|p| [r * (p[0] / r).sin(), p[1], r * (1.0 - (p[0] / r).cos())])
+            .collect();
+        let least = |m: &Mesh, x: &[f64]| least_stretches(m, x).into_iter().fold(1.0, f64::min);
+        let floor = least(&disc, &folded);
+        let carried = t.carry(&folded);
+        assert!(
+            least(fine, &carried) < 0.6 * floor,
+            "{} {floor}",
+            least(fine, &carried)
+        );
+        let mut put = carried.clone();
+        let moved = t.onto_chords(&folded, &mut put, |x| {
+            least_stretches(fine, x)
+                .iter()
+                .enumerate()
+                .filter(|&(_, &l)| l < floor)
+                .map(|(e, _)| e)
+                .collect()
+        });
+        // Away from the rim every fine triangle is now as stretched as the
+        // coarse state's least; beside it, whose new reference nodes lie
+        // on the circle, the chord compresses by its sag (about h / 4R).
+        let rim = fine.boundary_nodes();
+        let stretches = least_stretches(fine, &put);
+        for (e, tri) in fine.elements().enumerate() {
+            if tri.iter().all(|a| rim.binary_search(a).is_err()) {
+                assert!(
+                    stretches[e] >= floor - 1e-12,
+                    "element {e}: {}",
+                    stretches[e]
+                );
+            }
+        }
+        assert!(least(fine, &put) >= 0.95 * floor, "{}", least(fine, &put));
+        let new = t.refinement.midpoints.len();
+        assert!(moved > 0 && moved < new, "{moved} of {new}");
+        let mut counted = 0;
+        for (j, &[a, b]) in t.refinement.midpoints.iter().enumerate() {
+            let k = disc.node_count() + j;
+            let node = |x: &[f64]| [x[3 * k], x[3 * k + 1], x[3 * k + 2]];
+            if node(&put) == node(&carried) {
+                continue;
+            }
+            counted += 1;
+            for i in 0..3 {
+                let mid = 0.5 * (folded[3 * a + i] + folded[3 * b + i]);
+                assert!((put[3 * k + i] - mid).abs() < 1e-15, "node {k}");
+            }
+        }
+        assert!(counted > 0 && counted <= moved, "{counted} {moved}");
+        // The coarse nodes keep their values.
+        assert_eq!(put[..folded.len()], folded[..]);
+        // Nothing compressed: nothing moved.
+        let mut again = carried.clone();
+        assert_eq!(t.onto_chords(&folded, &mut again, |_| Vec::new()), 0);
+        assert_eq!(again, carried);
     }
 }

@@ -451,6 +451,15 @@ impl Model {
         )
     }
 
+    /// The elements whose smallest principal stretch (over their
+    /// quadrature points, as [`Model::min_stretch`]) is below `floor` at
+    /// `y`, in order.
+    pub fn elements_compressed_below(&self, y: &[f64], floor: f64) -> Vec<usize> {
+        (0..self.mesh.element_count())
+            .filter(|&e| self.least_stretch_at(e, &self.element_positions(e, y)) < floor)
+            .collect()
+    }
+
     /// The smallest principal stretch over element `e`'s quadrature points,
     /// its nodes at `ye`.
     fn least_stretch_at(&self, e: usize, ye: &[[f64; 3]]) -> f64 {
