@@ -7,6 +7,7 @@ use anyhow::Context;
 use clap::{Parser, Subcommand};
 use drape::human::human;
 use drape::output::directory::{self, DirectoryError};
+use drape::progress::{ProgressReading, StepProgress};
 use drape::scenario::{Scenario, ScenarioError};
 use drape::setup::Setup;
 use drape::simulation::{self, Front, RunError, Session, StepInfo};
@@ -15,7 +16,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Instant;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 mod alloc;
 mod drape_test;
@@ -71,6 +74,17 @@ enum Command {
         /// Print a line for every step (not only a progress bar).
         #[arg(long, short)]
         verbose: bool,
+        /// While one step runs longer than SECONDS (a finer level's
+        /// settle is one step, of up to an hour on a fine mesh), print
+        /// every SECONDS what it has done: Newton iterations and solves,
+        /// the residual, relaxed pseudo-steps, the friction round. 0: never.
+        #[arg(
+            long,
+            value_name = "SECONDS",
+            default_value_t = 30.0,
+            allow_negative_numbers = true
+        )]
+        progress_every: f64,
     },
     /// Validate a scenario and summarise it (mesh, loads, schedule) without running it.
     Check {
@@ -184,7 +198,8 @@ fn main() -> ExitCode {
             resume,
             quiet,
             verbose,
-        } => run(scenario, out, resume, quiet, verbose),
+            progress_every,
+        } => run(scenario, out, resume, quiet, verbose, progress_every),
         Command::Check { scenario } => check(&scenario),
         Command::Render(args) => render(args),
         Command::Plot { dir, output, size } => plot(&dir, output, size),
@@ -425,7 +440,13 @@ fn run(
     resume: Option<PathBuf>,
     quiet: bool,
     verbose: bool,
+    progress_every: f64,
 ) -> Result<(), Failure> {
+    if !(progress_every.is_finite() && progress_every >= 0.0) {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "--progress-every {progress_every}: a number of seconds, 0 or more, is needed"
+        )));
+    }
     // Ctrl-C or SIGTERM while the scenario is read and built (a large
     // mesh takes seconds) ends the process at once, saying so.
     signals::install();
@@ -472,7 +493,16 @@ fn run(
     for warning in simulation::warnings(&setup) {
         eprintln!("warning: {warning}");
     }
-    let control = session.control(Some(&signals::STOP));
+    let counts = Arc::new(StepProgress::new());
+    let mut control = session.control(Some(&signals::STOP));
+    control.progress = Some(&counts);
+    let watching = (!quiet && progress_every > 0.0).then(|| {
+        watch_long_steps(
+            counts.clone(),
+            Duration::from_secs_f64(progress_every),
+            progress.bar.clone(),
+        )
+    });
     let result = drape::levels::run_with(
         &parsed,
         (path, &text),
@@ -481,6 +511,10 @@ fn run(
         &mut |info| progress.step(info),
         control,
     );
+    if let Some((stop, watcher)) = watching {
+        stop.store(true, Ordering::Relaxed);
+        let _ = watcher.join();
+    }
     if let Some(bar) = &progress.bar {
         bar.finish_and_clear();
     }
@@ -624,6 +658,77 @@ impl Progress {
             self.last_print = Instant::now();
         }
     }
+}
+
+/// A thread that prints, every `every` while one step has run for longer
+/// than `every`, what the step has done ([`step_in_progress`]); stopped
+/// by setting the flag it returns.
+fn watch_long_steps(
+    counts: Arc<StepProgress>,
+    every: Duration,
+    bar: Option<ProgressBar>,
+) -> (Arc<AtomicBool>, std::thread::JoinHandle<()>) {
+    let stop = Arc::new(AtomicBool::new(false));
+    let stopped = stop.clone();
+    let watcher = std::thread::spawn(move || {
+        let poll = every.min(Duration::from_millis(200));
+        let (mut steps, mut since, mut printed) = (counts.read().steps, Instant::now(), None);
+        while !stopped.load(Ordering::Relaxed) {
+            std::thread::sleep(poll);
+            let reading = counts.read();
+            if reading.steps != steps {
+                (steps, since, printed) = (reading.steps, Instant::now(), None);
+                continue;
+            }
+            let due = printed.is_none_or(|at: Instant| at.elapsed() >= every);
+            if since.elapsed() >= every && due {
+                let line = step_in_progress(&reading, since.elapsed());
+                match &bar {
+                    Some(bar) => bar.println(&line),
+                    None => eprintln!("{line}"),
+                }
+                printed = Some(Instant::now());
+            }
+        }
+    });
+    (stop, watcher)
+}
+
+/// The line on a step that has run for `running`: its number, the level
+/// of a multilevel settle, Newton's iterations and solves with the last
+/// residual, the relaxed increment's pseudo-steps and the friction round.
+fn step_in_progress(r: &ProgressReading, running: Duration) -> String {
+    let seconds = running.as_secs();
+    let mut line = format!(
+        "step {} running for {}:{:02}",
+        r.steps + 1,
+        seconds / 60,
+        seconds % 60
+    );
+    if r.level > 0 {
+        line += &format!(", level {} ({} T3)", r.level, r.elements);
+    }
+    line += &format!(
+        ": {} Newton {} in {} {}",
+        r.iterations,
+        if r.iterations == 1 {
+            "iteration"
+        } else {
+            "iterations"
+        },
+        r.solves,
+        if r.solves == 1 { "solve" } else { "solves" }
+    );
+    if r.residual.is_finite() {
+        line += &format!(", residual {:.3e} N", r.residual);
+    }
+    if r.pseudo_steps > 0 {
+        line += &format!(", relaxed: pseudo-step {}", r.pseudo_steps);
+    }
+    if r.friction_round > 0 {
+        line += &format!(", friction round {}", r.friction_round);
+    }
+    line
 }
 
 /// What a completed run prints: rest, steps, energy balance, monitors.
@@ -893,4 +998,40 @@ fn example(name: Option<&str>, write: Option<&Path>, force: bool) -> Result<(), 
             .map_err(Failure::Run)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The line on a long step: a relaxed finer level in its third
+    /// friction round, and a plain step of a single-level run.
+    #[test]
+    fn a_step_in_progress_is_said_in_one_line() {
+        let relaxed = ProgressReading {
+            steps: 41,
+            iterations: 1234,
+            solves: 57,
+            residual: 2.5e-3,
+            pseudo_steps: 45,
+            friction_round: 3,
+            level: 3,
+            elements: 12540,
+        };
+        assert_eq!(
+            step_in_progress(&relaxed, Duration::from_secs(754)),
+            "step 42 running for 12:34, level 3 (12540 T3): 1234 Newton iterations in 57 solves, \
+             residual 2.500e-3 N, relaxed: pseudo-step 45, friction round 3"
+        );
+        let plain = ProgressReading {
+            iterations: 1,
+            solves: 1,
+            residual: f64::NAN,
+            ..ProgressReading::default()
+        };
+        assert_eq!(
+            step_in_progress(&plain, Duration::from_secs(31)),
+            "step 1 running for 0:31: 1 Newton iteration in 1 solve"
+        );
+    }
 }

@@ -116,3 +116,57 @@ fn a_multilevel_run_is_the_same_on_one_thread_and_two_and_measures_renders_and_p
     drape(&["plot", out_s], 2);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A step that runs longer than `--progress-every` is reported while it
+/// runs (a finer level's settle is one step): its number, its level and
+/// Newton's counts; the run is the same as without.
+#[test]
+fn a_long_step_is_reported_while_it_runs() {
+    let dir = scratch("issue43-progress");
+    let scenario = tester();
+    let scenario = scenario.to_str().unwrap();
+    let mut histories = Vec::new();
+    let mut reported = String::new();
+    for every in ["0", "0.001"] {
+        let out = dir.join(format!("out-{every}"));
+        let run = Command::new(DRAPE)
+            .args(["run", scenario, "--out", out.to_str().unwrap()])
+            .args(["--progress-every", every])
+            .env("RAYON_NUM_THREADS", "1")
+            .stdin(Stdio::null())
+            .output()
+            .expect("drape runs");
+        let err = String::from_utf8_lossy(&run.stderr).into_owned();
+        assert!(run.status.success(), "{err}");
+        histories.push(std::fs::read(out.join("history.csv")).unwrap());
+        if every == "0" {
+            assert!(!err.contains("running for"), "{err}");
+        } else {
+            reported = err;
+        }
+    }
+    assert!(histories[0] == histories[1], "the counted run differs");
+    // The finer levels' increments take tens of milliseconds at least.
+    let line = reported
+        .lines()
+        .find(|l| l.contains("running for") && l.contains(", level "))
+        .unwrap_or_else(|| panic!("no line on a finer level's step:\n{reported}"));
+    assert!(
+        line.contains(" T3): ") && line.contains("Newton iteration") && line.contains(" solve"),
+        "{line}"
+    );
+    // A negative interval is refused by name.
+    let refused = Command::new(DRAPE)
+        .args(["run", scenario, "--progress-every", "-1"])
+        .args(["--out", dir.join("refused").to_str().unwrap()])
+        .stdin(Stdio::null())
+        .output()
+        .expect("drape runs");
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&refused.stderr).contains("--progress-every -1"),
+        "{}",
+        String::from_utf8_lossy(&refused.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

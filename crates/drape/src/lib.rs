@@ -33,6 +33,7 @@ pub mod mesh;
 pub mod model;
 pub mod output;
 pub mod par;
+pub mod progress;
 pub mod psd;
 pub mod quadrature;
 pub mod scenario;

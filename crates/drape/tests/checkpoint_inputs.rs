@@ -175,9 +175,9 @@ fn resume(setup: &Setup, out: &Path) -> Result<simulation::Summary, RunError> {
 
 fn resume_from(setup: &Setup, out: &Path, front: Front) -> Result<simulation::Summary, RunError> {
     let control = RunControl {
-        stop: None,
         resume: true,
         front,
+        ..RunControl::default()
     };
     simulation::run_with(setup, out, &mut |_| {}, control)
 }

@@ -146,6 +146,9 @@ impl StaticStepper {
         let mut total = None;
         let mut round = 0;
         let energies = loop {
+            if let Some(p) = &ws.newton.progress {
+                p.friction_round(round);
+            }
             let friction = if lagging {
                 FrictionLag::At(&ws.lag, lag_contact.as_ref())
             } else if rounds {
@@ -303,6 +306,9 @@ fn solve_increment(
         } else {
             0.0
         };
+        if let (Some(p), true) = (&newton.progress, c > 0.0) {
+            p.pseudo_step();
+        }
         let terms = if c > 0.0 {
             for (qi, a) in q.iter_mut().zip(&anchor) {
                 *qi = c * a;

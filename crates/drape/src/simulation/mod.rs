@@ -378,6 +378,9 @@ pub struct RunControl<'a> {
     pub resume: bool,
     /// The front end whose user reads the messages.
     pub front: Front,
+    /// Where the run counts the step in progress for the front end to
+    /// read ([`crate::progress`]); none: nothing counted.
+    pub progress: Option<&'a std::sync::Arc<crate::progress::StepProgress>>,
 }
 
 /// The checkpoint file in an output directory.
@@ -549,6 +552,7 @@ fn run_session(
     if control.stop.is_some() {
         ws.newton.interrupt = Some(interrupt.clone());
     }
+    ws.newton.progress = control.progress.cloned();
     // The frames' thread borrows the model and the output directory; the
     // scope ends only when it has written every frame handed to it.
     std::thread::scope(|scope| {
@@ -854,6 +858,10 @@ impl Stepper<'_, '_> {
             strain_energy: outcome.energies.strain(),
             external_work: state.external_work,
         });
+        // After the observer, which may read the step's counts.
+        if let Some(p) = &self.ws.newton.progress {
+            p.step_done();
+        }
         counters.since_frame += 1;
         if counters.since_frame >= self.setup.output_every {
             let output_start = Instant::now();

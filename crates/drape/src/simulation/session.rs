@@ -109,6 +109,7 @@ impl Session {
             stop,
             resume: self.resume,
             front: self.front,
+            progress: None,
         }
     }
 

@@ -322,6 +322,9 @@ pub struct NewtonWorkspace {
     /// [`NewtonError::Interrupted`] (issue 46: a step that never ends
     /// must not hold a Ctrl-C back).
     pub interrupt: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+    /// Where a front end reads the step in progress: each solve and
+    /// iteration counted, the last residual (`crate::progress`).
+    pub progress: Option<std::sync::Arc<crate::progress::StepProgress>>,
     /// The last solve's energy at its first guess and at its last
     /// iterate, when its system has a finite energy throughout and was
     /// not revised in between: whether a solve that did not converge
@@ -386,6 +389,7 @@ impl NewtonWorkspace {
             ppn: Progressive::default(),
             woodbury: Woodbury::default(),
             interrupt: None,
+            progress: None,
             descent: None,
         }
     }
@@ -808,6 +812,9 @@ pub fn solve(
         projections: 0,
     };
     start_projection(system, settings, ws, y.len());
+    if let Some(p) = &ws.progress {
+        p.solve_started();
+    }
     let mut eval = system.evaluate(y, &mut ws.g, Some(&mut ws.h[..]));
     let mut have_hessian = true;
     let mut residual = eval.merit.unwrap_or_else(|| norm(&ws.g));
@@ -825,6 +832,9 @@ pub fn solve(
         };
         let it = report.iterations + report.chord_steps;
         interrupted(ws, it)?;
+        if let Some(p) = &ws.progress {
+            p.iterate(residual, it > 0);
+        }
         if ended(
             settings,
             it,
