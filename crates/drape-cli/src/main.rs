@@ -680,8 +680,10 @@ fn watch_long_steps(
                 (steps, since, printed) = (reading.steps, Instant::now(), None);
                 continue;
             }
+            // Between a level's step and the next level's first solve
+            // (measured, refined, built) nothing is solving.
             let due = printed.is_none_or(|at: Instant| at.elapsed() >= every);
-            if since.elapsed() >= every && due {
+            if since.elapsed() >= every && due && reading.solves > 0 {
                 let line = step_in_progress(&reading, since.elapsed());
                 match &bar {
                     Some(bar) => bar.println(&line),

@@ -12,8 +12,8 @@
 //! reaches them so that no triangle is halved twice
 //! ([`crate::mesh::refine`]) —; the state is carried onto the new
 //! mesh with its new nodes on the surface, or on their chords where the
-//! surface would compress an element more than the coarse state has
-//! ([`transfer`]); the scenario is built again on the new mesh, by the one path every term follows
+//! surface would compress an element past Saint-Venant–Kirchhoff's
+//! stability ([`transfer`]); the scenario is built again on the new mesh, by the one path every term follows
 //! ([`Scenario::build_level`]: supports, loads, monitors, mass, bending
 //! patches, contact and the Hessian's layout all made from the mesh), as
 //! a static analysis of one load increment at the full load; and that
@@ -34,6 +34,7 @@ pub mod indicator;
 pub mod transfer;
 
 use crate::integrator::State;
+use crate::material::CRITICAL_STRETCH;
 use crate::measure::{DrapeTester, Given, Surface, measure};
 use crate::scenario::Scenario;
 use crate::setup::{Analysis, Setup};
@@ -227,7 +228,7 @@ pub fn run_with(
             k + 1,
         )
         .map_err(failed)?;
-        let state = carry(&next, &transfer, &finished.state, model);
+        let state = carry(&next, &transfer, &finished.state);
         let mut counters = finished.counters;
         counters.wall_seconds += since.elapsed().as_secs_f64();
         start = Some(LevelStart {
@@ -294,37 +295,37 @@ fn build_level(
 /// once, not halved (`integrator::statics`): on the 8-ring disc of the
 /// tests the second level failed in 200 from the full load and was
 /// relaxed (276 iterations in all; halved instead, it settled from a
-/// quarter of the load, in another fold pattern). Since [`carry`] keeps
-/// the fine elements from being crushed across the folds, its levels
-/// settle at once (63 and 24 iterations); with the weight put on in one
-/// increment, the first finer level still fails in 200 and is relaxed
-/// (8 pseudo-steps, 269 iterations).
+/// quarter of the load, in another fold pattern). They now settle at
+/// once (86 and 141 iterations; 75 and 33 since [`carry`] keeps the fine
+/// elements from being crushed across the folds); with a membrane ten
+/// times stiffer and the weight put on in one increment, the first finer
+/// level still fails in 200 and is relaxed (7 pseudo-steps).
 pub const LEVEL_ITERATIONS: usize = 200;
 
-/// The state `coarse` (on `coarse_model`'s mesh) carried onto `fine`'s
-/// mesh by `transfer`, at rest (a static level), its time, work and
-/// friction dissipation kept; a new node held by a support at its
-/// reference position. The new nodes go on the surface
-/// ([`transfer`]), but not where that compresses a fine element more
-/// than the coarse state compresses any of its own (its least principal
-/// stretch, or 1): across a fold of the coarse level the surface's
-/// quadratic overshoots, and the new nodes of such elements go back on
-/// their chords ([`Transfer::onto_chords`]). Measured on Matsudaira B's
-/// third specimen on ISO's geometry (docs/validation.md): the surface
-/// alone carried a coarse state whose least stretch was 0.996 into one
-/// of 0.071 on the fine mesh (31 elements below Saint-Venant–Kirchhoff's
-/// stable `1/sqrt(3)`), which a finer level's settle may keep collapsed.
-fn carry(
-    fine: &Setup,
-    transfer: &Transfer,
-    coarse: &State,
-    coarse_model: &crate::model::Model,
-) -> State {
+/// The state `coarse` carried onto `fine`'s mesh by `transfer`, at rest
+/// (a static level), its time, work and friction dissipation kept; a new
+/// node held by a support at its reference position. The new nodes go on
+/// the surface ([`transfer`]), but not where that compresses a fine
+/// element past [`CRITICAL_STRETCH`], where Saint-Venant–Kirchhoff loses
+/// stability and which no converged step may keep: across a tight fold
+/// of the coarse level the surface's quadratic overshoots, and the new
+/// nodes of such elements go back on their chords
+/// ([`Transfer::onto_chords`]), where a fine triangle is strained as its
+/// coarse one. Measured on Matsudaira B's third specimen on ISO's
+/// geometry (docs/validation.md, "A finer level crushed by its start"):
+/// the surface alone carried a coarse state whose least principal stretch
+/// was 0.996 into one of 0.071 (31 elements below `1/sqrt(3)`), and its
+/// fifth level settled into a collapsed element and failed. Putting back
+/// every new node of an element more compressed than the coarse state's
+/// least (about a third of them there) cost the multilevel benchmark
+/// 22 % more Newton iterations on its finer levels (31 % more time) and
+/// a faille's third level ten times its iterations: milder compressions
+/// are left for the level's settle to undo.
+fn carry(fine: &Setup, transfer: &Transfer, coarse: &State) -> State {
     let model = &fine.model;
     let mut positions = transfer.carry(&coarse.positions);
-    let floor = coarse_model.min_stretch(&coarse.positions).0.min(1.0);
     transfer.onto_chords(&coarse.positions, &mut positions, |y| {
-        model.elements_compressed_below(y, floor)
+        model.elements_compressed_below(y, CRITICAL_STRETCH)
     });
     let reference = model.initial_positions();
     for (i, held) in model.fixed().iter().enumerate() {

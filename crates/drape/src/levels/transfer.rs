@@ -27,9 +27,9 @@
 //! whose least was 0.996, measured). [`Transfer::onto_chords`] puts such
 //! elements' new nodes back on the middle of their chords, where a fine
 //! triangle is a piece of its coarse one and strained as it is (away
-//! from the rim: `onto_chords`); the multilevel settle does so wherever
-//! the fine state would be more compressed than the coarse one
-//! ([`super`]'s `carry`).
+//! from the rim: `onto_chords`); the multilevel settle does so where a
+//! fine element would be compressed past Saint-Venant–Kirchhoff's
+//! stability ([`super`]'s `carry`).
 //!
 //! **The rim.** A boundary edge has one triangle and no fit across it;
 //! its new node is put on the curve through the boundary nodes around it
