@@ -13,14 +13,14 @@
 //! ([`crate::mesh::refine`]) —; the state is carried onto the new
 //! mesh with its new nodes on the surface, or on their chords where the
 //! surface would compress an element past Saint-Venant–Kirchhoff's
-//! stability ([`transfer`]); the scenario is built again on the new mesh, by the one path every term follows
-//! ([`Scenario::build_level`]: supports, loads, monitors, mass, bending
-//! patches, contact and the Hessian's layout all made from the mesh), as
-//! a static analysis of one load increment at the full load; and that
-//! level is settled. The run stops refining when the drape coefficient
-//! changes by less than `tolerance` between two levels — with `resolution`
-//! set, only on a mesh that resolves the fabric's gravity bending length
-//! ([`resolved`]).
+//! stability ([`transfer`]); the scenario is built again on the new
+//! mesh, by the one path every term follows ([`Scenario::build_level`]:
+//! supports, loads, monitors, mass, bending patches, contact and the
+//! Hessian's layout all made from the mesh), as a static analysis of one
+//! load increment at the full load; and that level is settled. The run
+//! stops refining when the drape coefficient changes by less than
+//! `tolerance` between two levels — with `resolution` set, only on a
+//! mesh that resolves the fabric's gravity bending length ([`resolved`]).
 //!
 //! One output directory holds every level: the history goes on (its
 //! `elements` column says which mesh each row is on; a finer level's time

@@ -26,10 +26,10 @@
 //! the fine triangles beside it (to a stretch of 0.07 from a coarse state
 //! whose least was 0.996, measured). [`Transfer::onto_chords`] puts such
 //! elements' new nodes back on the middle of their chords, where a fine
-//! triangle is a piece of its coarse one and strained as it is (away
-//! from the rim: `onto_chords`); the multilevel settle does so where a
-//! fine element would be compressed past Saint-Venant–Kirchhoff's
-//! stability ([`super`]'s `carry`).
+//! triangle away from the rim is a piece of its coarse one and strained
+//! as it is; the multilevel settle does so where a fine element would be
+//! compressed past Saint-Venant–Kirchhoff's stability ([`super`]'s
+//! `carry`).
 //!
 //! **The rim.** A boundary edge has one triangle and no fit across it;
 //! its new node is put on the curve through the boundary nodes around it
@@ -137,8 +137,9 @@ impl Transfer {
     /// is — but for a green-split parent's middle triangle, which straddles
     /// the two halves, and beside the rim, whose new reference nodes lie on
     /// its curve: there the chord is shorter by its sag, about `h / 4R`
-    /// of an edge `h` on a rim of radius `R`. Returns how many new nodes were moved: none for a
-    /// refinement of higher order, whose new nodes halve no chord.
+    /// of an edge `h` on a rim of radius `R`. Returns how many new nodes
+    /// were moved: none for a refinement of higher order, whose new nodes
+    /// halve no chord.
     pub fn onto_chords(
         &self,
         values: &[f64],
