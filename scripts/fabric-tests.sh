@@ -9,7 +9,7 @@
 #                   (examples/fabrics/matsudaira2015-*.toml, KES units,
 #                   25.4 cm specimen on a 12.7 cm pedestal)
 #   matsudaira-iso  the same fabrics on the ISO 9073-9 geometry (30 cm on
-#                   18 cm, 15 rings): the article's diameters are not known
+#                   18 cm, 15 rings, F 31): the article's diameters are not known
 #   library         the six Petrak et al. 2025 files on converged meshes:
 #                   each file with [refine] levels = 4 along the folds, the
 #                   rim and the contact line, tolerance 0.01
@@ -89,6 +89,7 @@ for set in "${@:-matsudaira}"; do
       while read -r stem dc nodes; do
         iso="$work/iso-$stem.toml"
         sed -e 's/^radius = 0\.127 .*/radius = 0.15/' -e 's/^rings = 13 .*/rings = 15/' \
+            -e 's/^rings = 26 .*/rings = 31/' \
             -e 's/^radius = 0\.0635 .*/radius = 0.09/' \
             -e 's/at = \[0\.127, 0\.0, 0\.0\]/at = [0.15, 0.0, 0.0]/' \
             "examples/fabrics/$stem.toml" >"$iso"
