@@ -34,7 +34,7 @@
 //! entries of its cells whose boxes hold it. Linear in the mesh for a
 //! bounded number of entries per cell (a fabric is a surface: a cell as
 //! large as its elements holds a few of them, a fold a few more).
-//! A box over more than [`MAX_CELLS`] cells — in [`swept_candidates`], a
+//! A box over more than `MAX_CELLS` cells — in [`swept_candidates`], a
 //! node whose motion is far longer than the cells, or not finite — is
 //! kept out of the grid and tested against every box of the other kind
 //! instead: the grid never holds more than `MAX_CELLS` entries a box,

@@ -296,7 +296,7 @@ fn build_level(
 /// tests the second level failed in 200 from the full load and was
 /// relaxed (276 iterations in all; halved instead, it settled from a
 /// quarter of the load, in another fold pattern). They now settle at
-/// once (86 and 141 iterations; 75 and 33 since [`carry`] keeps the fine
+/// once (86 and 141 iterations; 75 and 33 since `carry` keeps the fine
 /// elements from being crushed across the folds); with a membrane ten
 /// times stiffer and the weight put on in one increment, the first finer
 /// level still fails in 200 and is relaxed (7 pseudo-steps).

@@ -9,7 +9,7 @@
 //!    unknowns, with bending): a symmetric system with couplings beyond
 //!    the triangles' (bending's stencils) by conjugate gradients
 //!    preconditioned with the factor of its compact part
-//!    ([`super::compact`]), while that converges in 20 iterations; a
+//!    (`super::compact`), while that converges in 20 iterations; a
 //!    weak or indefinite try leaves the next systems to the paths below,
 //!    8 of them, then twice as many each time in a row, up to 512.
 //! 1. **Block LU** (`direct`; `auto` up to 300,000 unknowns). Small
@@ -96,7 +96,7 @@ pub enum Factorization {
     /// GMRES preconditioned by a multigrid V-cycle (non-symmetric).
     MultigridGmres,
     /// Conjugate gradients preconditioned by the factor of the Hessian's
-    /// compact part ([`super::compact`]).
+    /// compact part (`super::compact`).
     CompactCg,
 }
 
@@ -225,7 +225,7 @@ pub enum LinearMode {
     /// conjugate gradients preconditioned with the factor of the
     /// Hessian's compact part: the couplings of nodes that share a
     /// triangle, bending's farther couplings moved onto the diagonal
-    /// ([`super::compact`]). Its factor has the membrane's fill, not the
+    /// (`super::compact`). Its factor has the membrane's fill, not the
     /// bending stencils'. Other systems as `direct`; without bending,
     /// `direct`.
     Compact,
