@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 /// Counters of the step in progress (module docs), each written by the run
 /// and read by anyone; the counts of one step are reset when it converges.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct StepProgress {
     /// Converged steps of the run (of this session: a resumed run counts
     /// from its resumption).
@@ -58,12 +58,26 @@ pub struct ProgressReading {
     pub elements: usize,
 }
 
+impl Default for StepProgress {
+    /// [`StepProgress::new`].
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl StepProgress {
-    /// Counters at zero.
+    /// Counters at zero, the residual not yet known (NaN).
     pub fn new() -> Self {
-        let p = Self::default();
-        p.residual.store(f64::NAN.to_bits(), Ordering::Relaxed);
-        p
+        Self {
+            steps: AtomicUsize::new(0),
+            iterations: AtomicUsize::new(0),
+            solves: AtomicUsize::new(0),
+            residual: AtomicU64::new(f64::NAN.to_bits()),
+            pseudo_steps: AtomicUsize::new(0),
+            friction_round: AtomicUsize::new(0),
+            level: AtomicUsize::new(0),
+            elements: AtomicUsize::new(0),
+        }
     }
 
     /// The counters now.

@@ -62,10 +62,10 @@
 //! the same reason a pseudo-step cut at its iterations while creeping to
 //! its end (its last increment within `RELAX_KEEP`) is kept where its
 //! energy fell and no element is compressed past Saint-Venant–Kirchhoff's
-//! stability (as no converged step may be), as an inexact proximal step (a sufficient decrease of
-//! `Pi`: Rockafellar 1976, "Monotone operators and the proximal point
-//! algorithm", SIAM J. Control Optim. 14): its last iterate is the next
-//! anchor, and `tau` is cut as after a failure. A pseudo-step cut further
+//! stability (as no converged step may be), as an inexact proximal step
+//! (a sufficient decrease of `Pi`: Rockafellar 1976, "Monotone operators
+//! and the proximal point algorithm", SIAM J. Control Optim. 14): its
+//! last iterate is the next anchor, and `tau` is cut as after a failure. A pseudo-step cut further
 //! from its end (across a fold) is repeated shorter: kept as well, such
 //! steps led the relaxed settle of `tests/relaxation.rs` to rest states
 //! of a potential 1–2.5 % higher than the fine loading path's

@@ -357,9 +357,9 @@ pub fn mean_edge(mesh: &crate::mesh::Mesh) -> f64 {
 /// [`mean_edge`] `h <= l / resolution`. A fold's crest bends the fabric
 /// over a few `l`; a mesh much coarser cannot follow it, folds the fabric
 /// fewer times and stiffer, and can change its drape coefficient less
-/// than the tolerance from one such level to the next (docs/validation.md,
-/// "The faille (F), and a convergence that was not one"). `Ok` when `resolution` is 0
-/// (nothing asked) or the mesh resolves it; else `Err((h, l /
+/// than the tolerance from one such level to the next
+/// (docs/validation.md, "The faille (F), and a convergence that was not
+/// one"). `Ok` when `resolution` is 0 (nothing asked) or the mesh resolves it; else `Err((h, l /
 /// resolution))`, the mean edge and the edge asked for (m).
 pub fn resolved(model: &crate::model::Model, resolution: f64) -> Result<(), (f64, f64)> {
     if resolution <= 0.0 {

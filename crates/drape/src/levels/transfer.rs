@@ -525,8 +525,8 @@ mod tests {
 
     /// A disc rolled tightly (the fold of a draped specimen's coarse
     /// level, measured there: 0.996 carried into 0.071): the surface
-    /// placement overshoots across the fold and compresses fine triangles below the coarse
-    /// state's least stretch. `onto_chords` puts back on their chords the
+    /// placement overshoots across the fold and compresses fine triangles
+    /// below the coarse state's least stretch. `onto_chords` puts back on their chords the
     /// new nodes of those triangles, and only those, until every fine
     /// triangle away from the rim is as stretched as the coarse state's
     /// least (refined everywhere, each fine triangle with its new nodes on
