@@ -738,8 +738,12 @@ fn print_completed(summary: &simulation::Summary, start: Instant, out: &Path) {
     if summary.at_rest == Some(true) {
         println!("{}", summary.message);
     }
+    let discarded = match summary.newton_iterations_discarded {
+        0 => String::new(),
+        n => format!(" and {n} in solves thrown away"),
+    };
     println!(
-        "completed {} {} to t = {:.6} s in {:.2} s ({} Newton iterations, {} cut-back steps)",
+        "completed {} {} to t = {:.6} s in {:.2} s ({} Newton iterations{discarded}, {} cut-back steps)",
         summary.steps,
         if summary.steps == 1 { "step" } else { "steps" },
         summary.time,

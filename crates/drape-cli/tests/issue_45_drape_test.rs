@@ -169,6 +169,16 @@ fn seeds_and_statistics() {
             assert!(s.get(key).is_some(), "a specimen lacks {key}");
         }
         assert_eq!(s["status"], "completed");
+        // Its run's iteration counts, as its summary has them.
+        let run = json(
+            &dir.join("a")
+                .join(s["dir"].as_str().unwrap())
+                .join("summary.json"),
+        );
+        for key in ["newton_iterations", "newton_iterations_discarded"] {
+            assert!(s[key].as_u64().is_some(), "a specimen lacks {key}");
+            assert_eq!(s[key], run[key], "{key}");
+        }
     }
     // A specimen crossing itself is named in the message, and only then.
     let crossing = a["specimens"]

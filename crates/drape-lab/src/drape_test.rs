@@ -198,9 +198,8 @@ pub fn report(out: &Path, test: &TestInfo, outcomes: &[Outcome]) -> anyhow::Resu
             }
         }
         let run_summary = summary(&dir);
-        let wall = run_summary
-            .as_ref()
-            .map_or(Value::Null, |s| s["wall_seconds"].clone());
+        let of_run = |key: &str| run_summary.as_ref().map_or(Value::Null, |s| s[key].clone());
+        let wall = of_run("wall_seconds");
         if status == "completed" {
             // The run's own words ("at rest ...", "completed N steps"),
             // whichever front end ran it.
@@ -216,6 +215,8 @@ pub fn report(out: &Path, test: &TestInfo, outcomes: &[Outcome]) -> anyhow::Resu
             "folds": folds,
             "crossings": crossings,
             "wall_seconds": wall,
+            "newton_iterations": of_run("newton_iterations"),
+            "newton_iterations_discarded": of_run("newton_iterations_discarded"),
             "message": message,
             "seed": plan.spec.seed,
             "waviness": plan.spec.waviness,

@@ -19,7 +19,9 @@ pub struct StepProgress {
     /// from its resumption).
     steps: AtomicUsize,
     /// Newton iterations since the last converged step, in every solve
-    /// (attempts that failed and were cut back or relaxed included).
+    /// (attempts that failed and were cut back or relaxed included); each
+    /// with a new Hessian, as `history.csv` counts them (chord steps are
+    /// not iterations).
     iterations: AtomicUsize,
     /// Newton solves since the last converged step.
     solves: AtomicUsize,
@@ -99,13 +101,15 @@ impl StepProgress {
         self.solves.fetch_add(1, Ordering::Relaxed);
     }
 
-    /// A Newton iterate with residual `residual`, after `iterated`
-    /// iterations of its solve were made (the first guess: none).
-    pub(crate) fn iterate(&self, residual: f64, iterated: bool) {
+    /// A Newton iterate with residual `residual`.
+    pub(crate) fn iterate(&self, residual: f64) {
         self.residual.store(residual.to_bits(), Ordering::Relaxed);
-        if iterated {
-            self.iterations.fetch_add(1, Ordering::Relaxed);
-        }
+    }
+
+    /// A Newton iteration (with a new Hessian: a chord step is not one,
+    /// as `history.csv` counts them) was made.
+    pub(crate) fn iterated(&self) {
+        self.iterations.fetch_add(1, Ordering::Relaxed);
     }
 
     /// A pseudo-step of a relaxed increment starts.

@@ -532,4 +532,12 @@ fn a_level_newton_cannot_settle_is_relaxed_without_halving() {
     assert!(relaxed.2.iterations > relaxed.1, "{:?}", relaxed);
     assert!(relaxed.2.residual.is_finite());
     assert_eq!(counts.read().steps, summary.steps);
+    // Every iteration is counted once in the summary: the converged
+    // steps' in `newton_iterations`, the solves' thrown away (the level's
+    // failed plain solve, 200 iterations, among them) besides.
+    let done: usize = readings.iter().map(|(_, _, r)| r.iterations).sum();
+    let discarded = summary.newton_iterations_discarded;
+    assert_eq!(done, summary.newton_iterations + discarded);
+    assert!(discarded >= 200, "{discarded} discarded");
+    assert_eq!(again.newton_iterations_discarded, discarded);
 }

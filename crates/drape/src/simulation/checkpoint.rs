@@ -1,7 +1,8 @@
 //! Checkpoints: the full state of a run in a versioned binary file, to
 //! resume from (`drape run --resume DIR`).
 //!
-//! Format (little-endian), version 7:
+//! Format (little-endian), version 7 (the later versions' additions
+//! below it):
 //!
 //! ```text
 //! magic "DRAPECKP" · version u32 · scenario hash u64
@@ -35,6 +36,10 @@
 //! changed, naming it. A path is kept as the bytes of the operating
 //! system's string (Unix), so that any path survives.
 //!
+//! Version 11 ends, after the gas, with the Newton iterations of the
+//! solves the run threw away (u64; [`Counters::discarded_iterations`]);
+//! an older file is read with 0 of them (the resumed summary then counts
+//! the session's alone).
 //! Version 10 has version 9's layout; its refinements replay with green
 //! splits undone ([`crate::mesh::refine::refine_again`]). A file of
 //! version 9 or older that refined twice or more is refused (its second
@@ -77,7 +82,7 @@ use crate::solver::{KeptFactor, KeptLinear, KeptMultigrid, LinearStats};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"DRAPECKP";
-const VERSION: u32 = 10;
+const VERSION: u32 = 11;
 
 /// Longest key of an input file (bytes).
 const MAX_KEY_BYTES: usize = 256;
@@ -119,6 +124,12 @@ pub struct Counters {
     /// What the linear solver has done so far (version 5; zeros from an
     /// older checkpoint): a resumed run's summary counts the whole run.
     pub linear: LinearStats,
+    /// The Newton iterations of the solves whose result the run threw
+    /// away — an attempt that failed and was cut back, relaxed or
+    /// refused, a pseudo-step repeated shorter — besides `iterations`,
+    /// which counts the converged steps' (version 11; 0 from an older
+    /// checkpoint).
+    pub discarded_iterations: usize,
 }
 
 /// The counts of [`LinearStats`], in the file's order.
@@ -494,6 +505,7 @@ impl Checkpoint {
                 b.extend_from_slice(&v.to_le_bytes());
             }
         }
+        b.extend_from_slice(&(c.discarded_iterations as u64).to_le_bytes());
         let hash = fnv1a(&b);
         b.extend_from_slice(&hash.to_le_bytes());
         b
@@ -729,6 +741,10 @@ impl Checkpoint {
         } else {
             Vec::new()
         };
+        // (Version 11: the discarded iterations; none counted before.)
+        if version >= 11 {
+            counters.discarded_iterations = r.usize("discarded Newton iterations")?;
+        }
         if r.remaining() != 0 {
             return Err(invalid(format!("{} trailing bytes", r.remaining())));
         }
@@ -1363,6 +1379,7 @@ mod tests {
                     chord_solves: 9,
                     ..LinearStats::default()
                 },
+                discarded_iterations: 13,
             },
             state: State {
                 time: 0.3,
@@ -1500,13 +1517,22 @@ mod tests {
         body
     }
 
-    /// `c` as version 5 wrote it (without the kept linear-solver state),
+    /// `c` as version 10 wrote it (without the discarded iterations),
+    /// version 8 (without the gas too), version 7 (without the levels
+    /// too), version 6 (without the self-contact layout too), version 5
+    /// (without the kept linear-solver state too),
     /// version 4 (without the friction dissipation and the linear counts
     /// too), version 3 (without the input files too), version 2 (without
     /// segment, step size and still steps too) or version 1 (without the
     /// persistence too).
     fn as_version(c: &Checkpoint, version: u32) -> Vec<u8> {
         let bytes = c.to_bytes();
+        // Version 10: without the discarded iterations, last before the
+        // checksum.
+        let bytes = seal(bytes[..bytes.len() - 8 - 8].to_vec(), 10);
+        if version == 10 {
+            return bytes;
+        }
         // Version 8: without the cavities' gas, last before the checksum.
         let bytes = seal(bytes[..bytes.len() - 8 - gas_len(c)].to_vec(), 8);
         if version == 8 {
@@ -1581,7 +1607,8 @@ mod tests {
         seal(old, version)
     }
 
-    /// Version 8 resumes without gas (no cavities then); version 6 with no self-contact layout; version 5 with
+    /// Version 10 resumes with no discarded iterations counted; version 8
+    /// without gas (no cavities then); version 6 with no self-contact layout; version 5 with
     /// nothing kept by the linear solver; version 4
     /// with no friction dissipated; version 3 without
     /// input files (unchecked); versions 1 and 2
@@ -1589,9 +1616,13 @@ mod tests {
     /// criterion's still steps (a fixed schedule's values), version 1 with
     /// the persistence 1 (the predictor it was written with).
     #[test]
-    fn reads_versions_1_to_6_with_defaults_for_the_new_fields() {
+    fn reads_older_versions_with_defaults_for_the_new_fields() {
         let c = sample(true);
         let mut expected = c.clone();
+        // Version 10: no discarded iterations counted.
+        expected.counters.discarded_iterations = 0;
+        let v10 = Checkpoint::from_bytes(&as_version(&c, 10), 6, 2, 0xdead_beef).unwrap();
+        assert_eq!(v10, expected);
         // Version 8: no gas.
         expected.state.gas = Vec::new();
         let v8 = Checkpoint::from_bytes(&as_version(&c, 8), 6, 2, 0xdead_beef).unwrap();
@@ -1807,7 +1838,8 @@ mod tests {
         // multigrid flag, its matrix's length and values, its 3 counters;
         // the factor's flag, length and values.
         // The self-contact layout, last: a node beyond the mesh's two.
-        let gas_at = bytes.len() - 8 - gas_len(&c);
+        // The gas, before the discarded iterations' count (u64).
+        let gas_at = bytes.len() - 8 - 8 - gas_len(&c);
         says(
             &forge(gas_at, &u64::MAX.to_le_bytes()),
             "cavity count 18446744073709551615 beyond the file",

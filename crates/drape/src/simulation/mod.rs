@@ -787,13 +787,21 @@ impl Stepper<'_, '_> {
         } else {
             depth.max(RELAX_DEPTH)
         };
-        advance(
+        let before = self.ws.newton.iterations;
+        let advanced = advance(
             self.setup,
             &mut self.state,
             (h, depth),
             self.length,
             self.ws,
-        )
+        );
+        // What the attempt did besides what its outcome reports: its
+        // failed solves, or all of it when it failed.
+        let done = self.ws.newton.iterations - before;
+        let kept = advanced.as_ref().map_or(0, |o| o.newton.iterations);
+        debug_assert!(kept <= done, "{kept} iterations reported, {done} done");
+        self.counters.discarded_iterations += done.saturating_sub(kept);
+        advanced
     }
 
     /// Books a converged step of size `h` that needed `cutbacks` halvings:
@@ -1031,6 +1039,7 @@ impl Stepper<'_, '_> {
         summary.first_step_seconds = self.first_step_seconds.unwrap_or(0.0);
         summary.linear = self.ws.newton.linear.stats;
         summary.first_contact_time = counters.first_contact_time;
+        summary.newton_iterations_discarded = counters.discarded_iterations;
         summary.levels.clone_from(&self.levels.records);
         if interrupted {
             summary.status = "interrupted".into();

@@ -32,8 +32,15 @@ pub struct Summary {
     pub time: f64,
     /// Time of the first step that ended with an active contact, or null.
     pub first_contact_time: Option<f64>,
-    /// Total Newton iterations.
+    /// Total Newton iterations of the converged steps (each step's
+    /// iterations in `history.csv` summed).
     pub newton_iterations: usize,
+    /// Newton iterations besides, of the solves whose result the run
+    /// threw away: a step's attempts that failed before it was cut back,
+    /// relaxed or refused, a pseudo-step repeated shorter. With
+    /// `newton_iterations`, all the iterations the run did (a run resumed
+    /// from a checkpoint older than this count: those since).
+    pub newton_iterations_discarded: usize,
     /// Steps that had to be cut back.
     pub cutbacks: usize,
     /// Wall-clock time of the run (s).
@@ -299,6 +306,7 @@ pub(super) fn summary(
         time: figures.time,
         first_contact_time: None,
         newton_iterations: iterations,
+        newton_iterations_discarded: 0,
         cutbacks,
         wall_seconds: start.elapsed().as_secs_f64(),
         setup_seconds: 0.0,

@@ -331,6 +331,11 @@ pub struct NewtonWorkspace {
     /// still went downhill (a relaxed pseudo-step keeps such an iterate,
     /// `integrator::statics`).
     pub descent: Option<(f64, f64)>,
+    /// The Newton iterations (each with a new Hessian, as
+    /// [`NewtonReport::iterations`] counts them) of every solve in this
+    /// workspace since it was made, converged or not: what a step's
+    /// attempts cost, the solves it threw away included.
+    pub iterations: usize,
 }
 
 /// The progressively projected Newton's state over one solve: the
@@ -391,6 +396,7 @@ impl NewtonWorkspace {
             interrupt: None,
             progress: None,
             descent: None,
+            iterations: 0,
         }
     }
 }
@@ -833,7 +839,7 @@ pub fn solve(
         let it = report.iterations + report.chord_steps;
         interrupted(ws, it)?;
         if let Some(p) = &ws.progress {
-            p.iterate(residual, it > 0);
+            p.iterate(residual);
         }
         if ended(
             settings,
@@ -917,6 +923,10 @@ pub fn solve(
         increment = alpha * increment_of(settings, &ws.dy, length);
         report.increments.push(increment);
         report.iterations += 1;
+        ws.iterations += 1;
+        if let Some(p) = &ws.progress {
+            p.iterated();
+        }
         if system.revise(y) {
             // Another system from here on: its residual and Hessian at `y`,
             // and no step of the old one counts towards convergence.
