@@ -32,6 +32,10 @@
 use super::patch::{Patch, normal};
 use crate::vec3::{dot, scale, sub};
 
+/// What a law of the curvatures gives a patch ([`evaluate_law`]): its
+/// energy `psi` (J), the moments `M = dpsi/dkappa` and `dM/dkappa`.
+pub type LawValue = (f64, [f64; 3], [[f64; 3]; 3]);
+
 /// Largest number of nodes of a patch.
 pub const MAX_NODES: usize = super::patch::MAX_NODES;
 /// Largest number of degrees of freedom of a patch.
@@ -89,7 +93,7 @@ fn mul_t(a: &[[f64; 3]; 3], u: [f64; 3]) -> [f64; 3] {
 /// The moments `M = A D' (kappa - kappa_0)` of curvatures `kappa` and the
 /// energy `1/2 (kappa - kappa_0) . M`.
 #[inline]
-fn moments(patch: &Patch, kappa: [f64; 3]) -> ([f64; 3], f64) {
+pub(super) fn moments(patch: &Patch, kappa: [f64; 3]) -> ([f64; 3], f64) {
     let e = [0, 1, 2].map(|j| kappa[j] - patch.rest[j]);
     let ad = &patch.stiffness;
     let m = [0, 1, 2].map(|i| ad[i][0] * e[0] + ad[i][1] * e[1] + ad[i][2] * e[2]);
@@ -127,13 +131,32 @@ pub fn evaluate_with(
     gauss_newton: bool,
     out: &mut Local,
 ) -> f64 {
+    evaluate_law(patch, x, hessian, gauss_newton, out, |kappa| {
+        let (m, energy) = moments(patch, kappa);
+        (energy, m, patch.stiffness)
+    })
+}
+
+/// [`evaluate_with`] for an energy `psi(kappa)` of the patch's curvatures
+/// other than the elastic one: `law(kappa)` gives `psi`, the moments `M
+/// = dpsi/dkappa` and `dM/dkappa` (for the elastic energy `A D' (kappa -
+/// kappa_0)` and `A D'`; the module docs' formulas hold with these). The
+/// Gauss–Newton part is positive semi-definite where `dM/dkappa` is.
+pub fn evaluate_law(
+    patch: &Patch,
+    x: &[[f64; 3]],
+    hessian: bool,
+    gauss_newton: bool,
+    out: &mut Local,
+    law: impl Fn([f64; 3]) -> LawValue,
+) -> f64 {
     let len = patch.len();
     debug_assert_eq!(x.len(), len);
     let (n, r) = normal(x);
     let v = [0, 1, 2].map(|j| patch.second_derivative(x, j));
     let kappa = v.map(|vj| dot(n, vj));
-    let (m, energy) = moments(patch, kappa);
-    let ad = &patch.stiffness;
+    let (energy, m, stiffness) = law(kappa);
+    let ad = &stiffness;
     out.energy = energy;
 
     let p = {

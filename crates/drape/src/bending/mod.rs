@@ -41,6 +41,7 @@
 //! checked against finite differences in its tests.
 
 pub mod edge;
+pub mod hysteresis;
 pub mod kernel;
 pub mod patch;
 
@@ -552,6 +553,26 @@ impl Bending {
         h: Option<&mut [f64]>,
         project: Option<&[bool]>,
     ) -> f64 {
+        self.add_law(pattern, y, g, h, project, &|_, _| None)
+    }
+
+    /// [`Bending::add`] for another energy of the patches' curvatures:
+    /// `law(k, kappa)` gives patch `k`'s energy, moments and their
+    /// derivative as [`kernel::evaluate_law`] takes them (`None`: the
+    /// elastic energy's). The projected patches take the Gauss–Newton part
+    /// of `law`'s Hessian.
+    pub(crate) fn add_law<L>(
+        &self,
+        pattern: &SparsePattern,
+        y: &[f64],
+        g: &mut [f64],
+        h: Option<&mut [f64]>,
+        project: Option<&[bool]>,
+        law: &L,
+    ) -> f64
+    where
+        L: Fn(usize, [f64; 3]) -> Option<kernel::LawValue> + Sync,
+    {
         let (node_ptr, _) = pattern.node_graph();
         let want_h = h.is_some();
         let hp = Shared(h.map_or(std::ptr::null_mut(), |h| h.as_mut_ptr()));
@@ -566,7 +587,13 @@ impl Bending {
                 p.positions(|a| [y[3 * a], y[3 * a + 1], y[3 * a + 2]], &mut x);
                 let gauss_newton =
                     want_h && project.is_some_and(|flags| nodes.iter().any(|&a| flags[a]));
-                energy += kernel::evaluate_with(p, &x[..len], want_h, gauss_newton, local);
+                energy +=
+                    kernel::evaluate_law(p, &x[..len], want_h, gauss_newton, local, |kappa| {
+                        law(k, kappa).unwrap_or_else(|| {
+                            let (m, energy) = kernel::moments(p, kappa);
+                            (energy, m, p.stiffness)
+                        })
+                    });
                 // SAFETY: patches that run at once (of one colour) share no
                 // node, so the gradient entries and Hessian blocks written
                 // below are disjoint across threads; the indices are those

@@ -77,6 +77,8 @@ pub struct Patch {
     pub stiffness: [[f64; 3]; 3],
     /// Curvature of the reference configuration, `kappa_0` (1/m).
     pub rest: [f64; 3],
+    /// The triangle's reference area `A` (m^2).
+    pub area: f64,
     /// How many of its edges are clamped.
     pub clamped_edges: u8,
 }
@@ -214,6 +216,7 @@ impl Patch {
             offset,
             stiffness,
             rest: [0.0; 3],
+            area,
             clamped_edges,
         };
         let mut at = [[0.0; 3]; MAX_NODES];

@@ -22,8 +22,8 @@ use crate::solver::newton::{
 };
 use potential::{IncrementalPotential, StepContext, StepTerm};
 use terms::{
-    BendingTerm, FeatureTerm, FrictionTerm, GasTerm, InertiaTerm, LoadTerm, MembraneTerm,
-    PenaltyTerm, SelfContactTerm, SelfFrictionTerm,
+    BendingTerm, FeatureTerm, FrictionTerm, GasTerm, HysteresisTerm, InertiaTerm, LoadTerm,
+    MembraneTerm, PenaltyTerm, SelfContactTerm, SelfFrictionTerm,
 };
 
 /// The state carried from step to step.
@@ -339,7 +339,7 @@ pub(crate) struct StepTerms<'a> {
     pub time: f64,
     /// The positions at the step's start and its size (s), for the terms
     /// that lag over the step (friction); in statics the load increment's
-    /// start and size. `None`: no friction.
+    /// start and size. `None`: no friction, no bending hysteresis.
     pub start: Option<(&'a [f64], f64)>,
     /// Where friction lags its normal force from.
     pub friction: FrictionLag<'a>,
@@ -381,6 +381,15 @@ fn step_potential<'a>(
     let mut list: Vec<Box<dyn StepTerm + 'a>> = vec![Box::new(MembraneTerm::new(model))];
     if let Some(bending) = model.bending() {
         list.push(Box::new(BendingTerm::new(bending, model.pattern())));
+        // Its hysteresis over the step, from the step's start.
+        if let (Some(law), Some(start)) = (model.bending_hysteresis(), terms.start) {
+            list.push(Box::new(HysteresisTerm::new(
+                bending,
+                law,
+                model.pattern(),
+                start,
+            )));
+        }
     }
     list.push(Box::new(LoadTerm::new(
         model,

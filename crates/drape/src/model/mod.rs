@@ -13,6 +13,7 @@ mod mass;
 
 pub use mass::MassKind;
 
+use crate::bending::hysteresis::Hysteresis;
 use crate::bending::{Bending, BendingRigidity};
 use crate::contact::features::ObstacleFeatures;
 use crate::contact::self_contact::{SelfContact, SelfContactSpec};
@@ -87,6 +88,8 @@ pub struct Model {
     contact: Option<ContactModel>,
     /// Bending stiffness, if any, attached to `pattern`.
     bending: Option<Bending>,
+    /// Bending hysteresis, if any (with bending only).
+    hysteresis: Option<Hysteresis>,
     /// Self-contact, if any.
     self_contact: Option<SelfContact>,
     /// The obstacles' sharp features kept out of the triangles, if any.
@@ -111,6 +114,7 @@ pub struct ModelBuilder {
     mass_kind: MassKind,
     contact: Option<ContactModel>,
     bending: Option<BendingRigidity>,
+    hysteresis: Option<Hysteresis>,
     clamped: Vec<bool>,
     self_contact: Option<SelfContactSpec>,
     membrane: MembraneIntegration,
@@ -167,6 +171,14 @@ impl ModelBuilder {
         self
     }
 
+    /// Bending hysteresis, if any ([`crate::bending::hysteresis`]): the
+    /// frictional moment of the bending patches (ignored without
+    /// bending).
+    pub fn bending_hysteresis(mut self, hysteresis: Option<Hysteresis>) -> Self {
+        self.hysteresis = hysteresis;
+        self
+    }
+
     /// Self-contact, if any ([`crate::contact::self_contact`]): on the
     /// mesh's (sub-)triangles.
     pub fn self_contact(mut self, spec: Option<SelfContactSpec>) -> Self {
@@ -198,6 +210,7 @@ impl ModelBuilder {
             mass_kind,
             contact,
             bending,
+            hysteresis,
             clamped,
             self_contact,
             membrane,
@@ -281,6 +294,7 @@ impl ModelBuilder {
             area_weights,
             pressure_quadrature,
             contact,
+            hysteresis: hysteresis.filter(|_| bending.is_some()),
             bending,
             self_contact,
             features,
@@ -398,6 +412,7 @@ impl Model {
             mass_kind: MassKind::Consistent,
             contact: None,
             bending: None,
+            hysteresis: None,
             clamped: Vec::new(),
             self_contact: None,
             membrane: MembraneIntegration::Auto,
@@ -545,6 +560,11 @@ impl Model {
     /// Bending stiffness, if any.
     pub fn bending(&self) -> Option<&Bending> {
         self.bending.as_ref()
+    }
+
+    /// The bending hysteresis, if any (only with bending).
+    pub fn bending_hysteresis(&self) -> Option<Hysteresis> {
+        self.hysteresis
     }
 
     /// Whether loops over elements and nodes go to rayon's pool. Below

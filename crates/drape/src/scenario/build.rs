@@ -4,7 +4,7 @@ use super::analysis::build_analysis;
 use super::cavity::build_cavities;
 use super::check::Checker;
 use super::contact::{build_contact, build_self_contact, check_initial_penetration};
-use super::material::{build_bending, build_material};
+use super::material::{build_bending, build_hysteresis, build_material};
 use super::specimen::{make_wavy, specimen_of};
 use super::{
     AnalysisKind, BoxSpec, Component, FixSpec, LoadKindSpec, LoadSpec, MAX_REFINE_LEVELS,
@@ -106,6 +106,7 @@ impl Scenario {
         let (material, section, density) = build_material(&c, material_spec, is_static)?;
         check_moduli(&c, material_spec)?;
         let bending = build_bending(&c, material_spec)?;
+        let hysteresis = build_hysteresis(&c, material_spec, bending.as_ref())?;
         let loads = (self.loads.iter().enumerate())
             .map(|(i, l)| build_load(&c, &mesh, i, l))
             .collect::<Result<Vec<_>, _>>()?;
@@ -159,6 +160,7 @@ impl Scenario {
             .mass(self.analysis.mass)
             .contact(contact)
             .bending(bending)
+            .bending_hysteresis(hysteresis)
             .membrane(self.mesh.membrane)
             .self_contact(self_contact)
             .cavities(cavities)

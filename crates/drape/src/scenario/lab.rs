@@ -12,6 +12,7 @@
 //! B   gf·cm²/cm   × 9.80665e-5                  → B    (N·m)        bending_rigidity = { warp, weft }
 //! G   gf/(cm·deg) × 0.980665 × 180/π = × 56.188 → G t  (N/m)        shear_modulus = G' / t
 //! EMT %  (strain at F_m = 490.3325 N/m)  E t = F_m / (EMT/100) (N/m)  warp_modulus, weft_modulus = E t / t
+//! 2HB gf·cm/cm    × 9.80665e-3 / 2              → HB   (N·m/m)      bending_hysteresis = { warp, weft }
 //! ```
 //!
 //! FAST (SiroFAST), with 1 gf/cm = 0.980665 N/m:
@@ -37,6 +38,8 @@ use serde::Deserialize;
 pub const GRAM_FORCE: f64 = 9.80665e-3;
 /// KES-FB1's maximum load `F_m` for EMT: 500 gf/cm (N/m).
 pub const KES_EMT_LOAD: f64 = 500.0 * GRAM_FORCE / 0.01;
+/// KES-FB2's bending hysteresis unit, gf·cm/cm, in N·m/m.
+pub const KES_HYSTERESIS: f64 = GRAM_FORCE;
 /// FAST-3's load for E100: 100 gf/cm (N/m).
 pub const FAST_E100_LOAD: f64 = 100.0 * GRAM_FORCE / 0.01;
 /// KES B: 1 gf·cm²/cm in N·m.
@@ -74,6 +77,11 @@ pub struct KesSpec {
     /// Tensile strain at 500 gf/cm `EMT` (%) `{ warp, weft }`, > 0:
     /// replaces `warp_modulus` and `weft_modulus`.
     pub EMT: Option<WarpWeft>,
+    /// Bending hysteresis `2HB` (gf·cm/cm) `{ warp, weft }`, >= 0, the
+    /// width of the moment–curvature loop: replaces `bending_hysteresis`
+    /// (its half, `HB`).
+    #[serde(rename = "2HB")]
+    pub HB2: Option<WarpWeft>,
 }
 
 /// `[material.fast]`: FAST values.
@@ -111,6 +119,8 @@ pub struct LabValues {
     pub shear: Option<f64>,
     /// Tensile stiffness warp, weft `E t` (N/m).
     pub tensile: Option<[f64; 2]>,
+    /// Bending hysteresis warp, weft `HB` (N m/m).
+    pub hysteresis: Option<[f64; 2]>,
 }
 
 impl KesSpec {
@@ -127,6 +137,9 @@ impl KesSpec {
                     KES_EMT_LOAD / (e.weft / 100.0),
                 ]
             }),
+            hysteresis: self
+                .HB2
+                .map(|h| [h.warp, h.weft].map(|v| 0.5 * v * KES_HYSTERESIS)),
         }
     }
 }
@@ -145,6 +158,7 @@ impl FastSpec {
                     FAST_E100_LOAD / (e.weft / 100.0),
                 ]
             }),
+            hysteresis: None,
         }
     }
 }
@@ -240,6 +254,7 @@ pub(super) fn resolve(c: &Checker, m: &MaterialSpec) -> Result<MaterialSpec, Sce
             "shear_modulus" => m.shear_modulus.is_some(),
             "warp_modulus" => m.warp_modulus.is_some(),
             "weft_modulus" => m.weft_modulus.is_some(),
+            "bending_hysteresis" => m.bending_hysteresis.is_some(),
             _ => false,
         };
         if let Some(si) = w.replaces.iter().find(|k| given(k)) {
@@ -282,6 +297,12 @@ pub(super) fn resolve(c: &Checker, m: &MaterialSpec) -> Result<MaterialSpec, Sce
         b.insert("warp".into(), toml::Value::Float(warp));
         b.insert("weft".into(), toml::Value::Float(weft));
         out.bending_rigidity = Some(toml::Value::Table(b));
+    }
+    if let Some([warp, weft]) = values.hysteresis {
+        let mut h = toml::Table::new();
+        h.insert("warp".into(), toml::Value::Float(warp));
+        h.insert("weft".into(), toml::Value::Float(weft));
+        out.bending_hysteresis = Some(toml::Value::Table(h));
     }
     if let Some(g) = values.shear {
         out.shear_modulus = per_thickness(g);
@@ -349,6 +370,13 @@ fn kes_written(k: &KesSpec) -> Vec<Written> {
         w("T", "mm", one(k.T), &["thickness"], false),
         w("B", "gf·cm²/cm", pair(k.B), &["bending_rigidity"], true),
         w("G", "gf/(cm·deg)", one(k.G), &["shear_modulus"], false),
+        w(
+            "2HB",
+            "gf·cm/cm",
+            pair(k.HB2),
+            &["bending_hysteresis"],
+            true,
+        ),
         w(
             "EMT",
             "% strain at 500 gf/cm",

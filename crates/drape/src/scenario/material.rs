@@ -331,3 +331,96 @@ pub(super) fn build_bending(
     }
     Ok(value)
 }
+
+/// `[material] bending_hysteresis` and `bending_hysteresis_rate` (README,
+/// "Scenario reference", `[material]`): `None` for none (the default, or
+/// `HB` 0). Needs a bending rigidity (`bending`).
+pub(super) fn build_hysteresis(
+    c: &Checker,
+    m: &MaterialSpec,
+    bending: Option<&BendingRigidity>,
+) -> Result<Option<crate::bending::hysteresis::Hysteresis>, ScenarioError> {
+    use crate::bending::hysteresis::{DEFAULT_RATE, Hysteresis};
+    let t = "material";
+    let key = "bending_hysteresis";
+    let rate = m.bending_hysteresis_rate.unwrap_or(DEFAULT_RATE);
+    if !(rate.is_finite() && rate > 0.0) {
+        return Err(c.invalid(
+            t,
+            None,
+            "bending_hysteresis_rate",
+            format!("must be a finite number > 0 (1/(m s)), not {rate}"),
+        ));
+    }
+    let Some(value) = &m.bending_hysteresis else {
+        if m.bending_hysteresis_rate.is_some() {
+            return Err(c.invalid(
+                t,
+                None,
+                "bending_hysteresis_rate",
+                "applies only with a bending_hysteresis (N m/m)".into(),
+            ));
+        }
+        return Ok(None);
+    };
+    let number = |v: &toml::Value| -> Result<f64, String> {
+        let h = match v {
+            toml::Value::Float(f) => *f,
+            toml::Value::Integer(i) => *i as f64,
+            other => return Err(format!("must be a number (N m/m), not {other}")),
+        };
+        if h.is_finite() && h >= 0.0 {
+            Ok(h)
+        } else {
+            Err(format!("must be a finite number >= 0 (N m/m), not {h}"))
+        }
+    };
+    let moment = match value {
+        toml::Value::Table(table) => {
+            if let Some(k) = table
+                .keys()
+                .find(|k| !matches!(k.as_str(), "warp" | "weft"))
+            {
+                return Err(c.invalid_in(
+                    t,
+                    key,
+                    k,
+                    "is not a key of bending_hysteresis (expected warp and weft, N m/m)".into(),
+                ));
+            }
+            let get = |name: &str| match table.get(name) {
+                Some(v) => number(v).map_err(|why| c.invalid_in(t, key, name, why)),
+                None => Err(c.invalid_in(
+                    t,
+                    key,
+                    name,
+                    "is required in a woven fabric's { warp, weft } bending hysteresis".into(),
+                )),
+            };
+            [get("warp")?, get("weft")?]
+        }
+        v => {
+            let h = number(v).map_err(|why| {
+                c.invalid(
+                    t,
+                    None,
+                    key,
+                    format!("{why}; or give a table {{ warp, weft }}"),
+                )
+            })?;
+            [h, h]
+        }
+    };
+    if moment == [0.0, 0.0] {
+        return Ok(None);
+    }
+    if bending.is_none() {
+        return Err(c.invalid(
+            t,
+            None,
+            key,
+            "is the frictional moment of bending, and this fabric does not bend: give a bending_rigidity (N m) too".into(),
+        ));
+    }
+    Ok(Some(Hysteresis { moment, rate }))
+}

@@ -244,6 +244,16 @@ pub struct MaterialSpec {
     /// membrane. Read by hand for messages naming the inner key.
     #[serde(default)]
     pub bending_rigidity: Option<toml::Value>,
+    /// Bending hysteresis `HB` (`crate::bending::hysteresis`): a number
+    /// (N m/m, >= 0) or a table `{ warp, weft }`; default none. Needs a
+    /// bending rigidity. Read by hand for messages naming the inner key.
+    #[serde(default)]
+    pub bending_hysteresis: Option<toml::Value>,
+    /// The curvature rate below which bending hysteresis lets the
+    /// curvature creep (1/(m s), > 0), default
+    /// [`crate::bending::hysteresis::DEFAULT_RATE`].
+    #[serde(default)]
+    pub bending_hysteresis_rate: Option<f64>,
     /// The warp direction in the initial configuration (projected on each
     /// element's plane), default `[1, 0, 0]`: the axes of the orthotropic
     /// model and of a woven `bending_rigidity`.
