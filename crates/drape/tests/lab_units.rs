@@ -199,3 +199,97 @@ fn bad_values_are_named_with_their_units() {
         "{e}"
     );
 }
+
+/// KES's bending hysteresis 2HB (gf·cm/cm) is the loop's width: `HB =
+/// 2HB / 2 × 9.80665e-3` N·m/m. Matsudaira's cotton broadcloth, 2HB =
+/// 0.124 (and 0.100 assumed for the weft): HB = 6.080123e-4 and
+/// 4.903325e-4 N·m/m by hand; the model gets it with the default creep
+/// rate.
+#[test]
+fn kes_bending_hysteresis_by_hand() {
+    let text = scenario(&KES.replace("G = 0.80", "G = 0.80\n2HB = { warp = 0.124, weft = 0.100 }"));
+    let s = parse(&text).unwrap();
+    let h = s.material.bending_hysteresis.as_ref().unwrap();
+    close(h["warp"].as_float().unwrap(), 6.080123e-4);
+    close(h["weft"].as_float().unwrap(), 4.903325e-4);
+    let setup = s.build(Path::new("fabric.toml"), &text).unwrap();
+    let law = setup.model.bending_hysteresis().expect("a hysteresis");
+    close(law.moment[0], 6.080123e-4);
+    close(law.moment[1], 4.903325e-4);
+    assert_eq!(law.rate, drape::bending::hysteresis::DEFAULT_RATE);
+    // Without 2HB, none.
+    let plain = scenario(KES);
+    let s = parse(&plain).unwrap();
+    let setup = s.build(Path::new("fabric.toml"), &plain).unwrap();
+    assert!(setup.model.bending_hysteresis().is_none());
+}
+
+/// `[material] bending_hysteresis` and its rate: refused by key, value
+/// and unit where they are wrong, or where there is nothing to bend.
+#[test]
+fn bad_hysteresis_is_named_with_its_unit() {
+    let with = |material: &str| {
+        scenario(KES).replace(
+            "poisson_ratio = 0.3",
+            &format!("poisson_ratio = 0.3\n{material}"),
+        )
+    };
+    let cases: [(String, &[&str]); 6] = [
+        (
+            with("bending_hysteresis = -1e-4"),
+            &["`material.bending_hysteresis`", "-0.0001", "N m/m"],
+        ),
+        (
+            with("bending_hysteresis = { warp = 1e-4 }"),
+            &["`material.bending_hysteresis.weft`", "required"],
+        ),
+        (
+            with("bending_hysteresis = { warp = 1e-4, weft = 1e-4, bias = 1e-4 }"),
+            &["bias", "warp and weft"],
+        ),
+        (
+            with("bending_hysteresis = 1e-4\nbending_hysteresis_rate = 0.0"),
+            &["`material.bending_hysteresis_rate`", "not 0", "1/(m s)"],
+        ),
+        (
+            with("bending_hysteresis_rate = 0.5"),
+            &[
+                "`material.bending_hysteresis_rate`",
+                "only with a bending_hysteresis",
+            ],
+        ),
+        (
+            scenario(KES).replace(
+                "B = { warp = 0.118, weft = 0.090 }\n",
+                "2HB = { warp = 0.1, weft = 0.1 }\n",
+            ),
+            &["`material.bending_hysteresis`", "bending_rigidity"],
+        ),
+    ];
+    for (text, says) in &cases {
+        let e = parse(text)
+            .and_then(|s| s.build(Path::new("fabric.toml"), text).map(|_| s))
+            .err()
+            .unwrap_or_else(|| panic!("accepted:\n{text}"));
+        let message = e.to_string();
+        for s in says.iter().chain(&["fabric.toml"]) {
+            assert!(message.contains(s), "{message:?} lacks {s:?}");
+        }
+    }
+    // A number is both directions'; HB 0 is none.
+    let text = with("bending_hysteresis = 2e-4");
+    let setup = parse(&text)
+        .unwrap()
+        .build(Path::new("fabric.toml"), &text)
+        .unwrap();
+    assert_eq!(
+        setup.model.bending_hysteresis().unwrap().moment,
+        [2e-4, 2e-4]
+    );
+    let text = with("bending_hysteresis = 0.0");
+    let setup = parse(&text)
+        .unwrap()
+        .build(Path::new("fabric.toml"), &text)
+        .unwrap();
+    assert!(setup.model.bending_hysteresis().is_none());
+}
