@@ -10,6 +10,9 @@
 #                   25.4 cm specimen on a 12.7 cm pedestal)
 #   matsudaira-iso  the same fabrics on the ISO 9073-9 geometry (30 cm on
 #                   18 cm, 15 rings, F 31): the article's diameters are not known
+#   matsudaira-hysteresis
+#                   the four fabrics with their measured bending hysteresis,
+#                   [material.kes] 2HB (Table 1; the files leave it out)
 #   library         the six Petrak et al. 2025 files on converged meshes:
 #                   each file with [refine] levels = 4 along the folds, the
 #                   rim and the contact line, tolerance 0.01
@@ -71,6 +74,11 @@ matsudaira="matsudaira2015-a-cotton-broad 82.9 2
 matsudaira2015-b-wool-tropical 49.8 5
 matsudaira2015-c-polyester-tropical 50.7 5
 matsudaira2015-f-polyester-faille 28.3 7"
+# fabric stem, 2HB (gf cm/cm; Matsudaira et al. 2015, Table 1)
+hysteresis="matsudaira2015-a-cotton-broad 0.124
+matsudaira2015-b-wool-tropical 0.033
+matsudaira2015-c-polyester-tropical 0.029
+matsudaira2015-f-polyester-faille 0.007"
 # fabric stem, laboratory DC (%) (Petrak et al. 2025, Table 5; nodes not given)
 library="petrak2025-m1-polyester-twill 22.3
 petrak2025-m2-polyester-plain 22.8
@@ -95,6 +103,14 @@ for set in "${@:-matsudaira}"; do
             "examples/fabrics/$stem.toml" >"$iso"
         test_one "iso-$stem" "$dc" "$nodes" "$iso"
       done <<<"$matsudaira" ;;
+    matsudaira-hysteresis)
+      while read -r stem dc nodes; do
+        hb=$(awk -v s="$stem" '$1 == s { print $2 }' <<<"$hysteresis")
+        with="$work/hysteresis-$stem.toml"
+        sed -e "s/^\[material.kes\]\$/[material.kes]\n2HB = { warp = $hb, weft = $hb }   # gf cm\/cm/" \
+            "examples/fabrics/$stem.toml" >"$with"
+        test_one "hysteresis-$stem" "$dc" "$nodes" "$with"
+      done <<<"$matsudaira" ;;
     library)
       while read -r stem dc; do
         converged="$work/converged-$stem.toml"
@@ -108,6 +124,6 @@ tolerance = 0.01
 TOML
         test_one "converged-$stem" "$dc" "?" "$converged"
       done <<<"$library" ;;
-    *) echo "unknown set '$set' (matsudaira, matsudaira-iso, library)" >&2; exit 2 ;;
+    *) echo "unknown set '$set' (matsudaira, matsudaira-iso, matsudaira-hysteresis, library)" >&2; exit 2 ;;
   esac
 done
