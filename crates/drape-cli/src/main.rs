@@ -242,6 +242,47 @@ fn main() -> ExitCode {
     }
 }
 
+/// What `drape check` says of the fabric's bending, in SI (what a lab
+/// table turned into): its rigidity, its gravity bending length and its
+/// hysteresis; `None` without bending.
+fn bending_line(m: &drape::model::Model) -> Option<String> {
+    use drape::bending::BendingRigidity;
+    let rigidity = match m.bending()?.rigidity {
+        BendingRigidity::Isotropic(b) => format!("B = {b:.4e} N m"),
+        BendingRigidity::Woven { warp, weft, .. } => {
+            format!("B = {warp:.4e} N m warp, {weft:.4e} N m weft")
+        }
+        BendingRigidity::Plate {
+            rigidity,
+            poisson_ratio,
+        } => format!(
+            "plate, D = {} N m, nu = {}",
+            human(rigidity),
+            human(poisson_ratio)
+        ),
+    };
+    let length = m
+        .bending_length()
+        .map(|l| format!(", gravity bending length {:.3} cm", 100.0 * l))
+        .unwrap_or_default();
+    let hysteresis = m
+        .bending_hysteresis()
+        .map(|h| {
+            let [warp, weft] = h.moment;
+            let moment = if warp == weft {
+                format!("{warp:.4e} N m/m")
+            } else {
+                format!("{warp:.4e} N m/m warp, {weft:.4e} N m/m weft")
+            };
+            format!(
+                "; hysteresis HB = {moment}, creeping below {} 1/(m s)",
+                human(h.rate)
+            )
+        })
+        .unwrap_or_default();
+    Some(format!("{rigidity}{length}{hysteresis}"))
+}
+
 /// The scenario at `path` built, with its text.
 fn load(path: &Path) -> Result<(Setup, String), Failure> {
     let (setup, source, _) = load_scenario(path)?;
@@ -276,6 +317,9 @@ fn check(path: &Path) -> Result<(), Failure> {
     };
     println!("  mass      {:.6e} kg ({mass_kind})", m.total_mass());
     println!("  loads     {}", m.loads().len());
+    if let Some(line) = bending_line(m) {
+        println!("  bending   {line}");
+    }
     let x = m.initial_positions();
     for (i, cavity) in m.cavities().iter().enumerate() {
         let gas = cavity.initial_state(&x);

@@ -453,6 +453,51 @@ fn check_counts_the_pieces_of_a_mesh() {
     );
 }
 
+/// A fabric given in KES units is checked in SI: its bending rigidity,
+/// its gravity bending length and its hysteresis as drape takes them
+/// (B = 0.118 gf·cm²/cm = 1.1572e-5 N m, W = 12.38 mg/cm²: (B / w)^(1/3)
+/// = 2.120 cm; 2HB = 0.124 gf·cm/cm, HB = 6.0801e-4 N m/m); a fabric
+/// without bending has no such line.
+#[test]
+fn check_says_the_bending_in_si() {
+    let tmp = TempDir::new("check-bending");
+    let scenario = tmp.path().join("kes.toml");
+    let text = |kes: &str| {
+        format!(
+            "[mesh]\nshape = \"disc\"\nradius = 0.15\nrings = 3\n[material]\nmodel = \"orthotropic\"\npoisson_ratio = 0.3\n{kes}\n[[load]]\nkind = \"gravity\"\nacceleration = [0.0, 0.0, -9.80665]\n[time]\nsegments = [{{ steps = 1, dt = 1.0e-3 }}]\n"
+        )
+    };
+    let kes = "[material.kes]\nW = 12.38\nT = 0.497\nB = { warp = 0.118, weft = 0.118 }\n2HB = { warp = 0.124, weft = 0.124 }\nG = 0.8\nEMT = { warp = 5.0, weft = 5.0 }";
+    std::fs::write(&scenario, text(kes)).unwrap();
+    let o = drape(tmp.path(), &["check".as_ref(), scenario.as_os_str()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe("check", &o));
+    let line = stdout(&o)
+        .lines()
+        .find(|l| l.trim_start().starts_with("bending"))
+        .unwrap_or_else(|| panic!("{}", describe("check: no bending line", &o)))
+        .to_string();
+    for says in [
+        "B = 1.1572e-5 N m warp, 1.1572e-5 N m weft",
+        "gravity bending length 2.120 cm",
+        "hysteresis HB = 6.0801e-4 N m/m",
+        "creeping below 1 1/(m s)",
+    ] {
+        assert!(line.contains(says), "{line:?} lacks {says:?}");
+    }
+    let plain = kes.replace(
+        "B = { warp = 0.118, weft = 0.118 }\n2HB = { warp = 0.124, weft = 0.124 }\n",
+        "",
+    );
+    std::fs::write(&scenario, text(&plain)).unwrap();
+    let o = drape(tmp.path(), &["check".as_ref(), scenario.as_os_str()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe("check", &o));
+    assert!(
+        !stdout(&o).contains("  bending"),
+        "{}",
+        describe("check", &o)
+    );
+}
+
 #[test]
 fn check_accepts_every_example_and_prints_the_node_count() {
     let tmp = TempDir::new("check-examples");
