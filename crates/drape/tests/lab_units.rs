@@ -67,6 +67,21 @@ fn parse(text: &str) -> Result<Scenario, ScenarioError> {
     Scenario::parse(text, Path::new("fabric.toml"))
 }
 
+/// Each scenario refused, its message naming the file and saying each
+/// of its words.
+fn refused(cases: &[(String, &[&str])]) {
+    for (text, says) in cases {
+        let e = parse(text)
+            .and_then(|s| s.build(Path::new("fabric.toml"), text).map(|_| s))
+            .err()
+            .unwrap_or_else(|| panic!("accepted:\n{text}"));
+        let message = e.to_string();
+        for s in says.iter().chain(&["fabric.toml"]) {
+            assert!(message.contains(s), "{message:?} lacks {s:?}");
+        }
+    }
+}
+
 fn bending(s: &Scenario) -> (f64, f64) {
     let b = s.material.bending_rigidity.as_ref().unwrap();
     (b["warp"].as_float().unwrap(), b["weft"].as_float().unwrap())
@@ -179,16 +194,7 @@ fn bad_values_are_named_with_their_units() {
             &["`material.density`", "required", "mg/cm²"],
         ),
     ];
-    for (text, says) in &cases {
-        let e = parse(text)
-            .and_then(|s| s.build(Path::new("fabric.toml"), text).map(|_| s))
-            .err()
-            .unwrap_or_else(|| panic!("accepted:\n{text}"));
-        let message = e.to_string();
-        for s in says.iter().chain(&["fabric.toml"]) {
-            assert!(message.contains(s), "{message:?} lacks {s:?}");
-        }
-    }
+    refused(&cases);
     // An unknown key of the table is refused at its line, with the keys
     // it takes.
     let e = parse(&scenario(KES).replace("G = 0.80", "GG = 0.80"))
@@ -266,16 +272,7 @@ fn bad_hysteresis_is_named_with_its_unit() {
             &["`material.bending_hysteresis`", "bending_rigidity"],
         ),
     ];
-    for (text, says) in &cases {
-        let e = parse(text)
-            .and_then(|s| s.build(Path::new("fabric.toml"), text).map(|_| s))
-            .err()
-            .unwrap_or_else(|| panic!("accepted:\n{text}"));
-        let message = e.to_string();
-        for s in says.iter().chain(&["fabric.toml"]) {
-            assert!(message.contains(s), "{message:?} lacks {s:?}");
-        }
-    }
+    refused(&cases);
     // A number is both directions'; HB 0 is none.
     let text = with("bending_hysteresis = 2e-4");
     let setup = parse(&text)

@@ -93,7 +93,7 @@ fn mul_t(a: &[[f64; 3]; 3], u: [f64; 3]) -> [f64; 3] {
 /// The moments `M = A D' (kappa - kappa_0)` of curvatures `kappa` and the
 /// energy `1/2 (kappa - kappa_0) . M`.
 #[inline]
-pub(super) fn moments(patch: &Patch, kappa: [f64; 3]) -> ([f64; 3], f64) {
+fn moments(patch: &Patch, kappa: [f64; 3]) -> ([f64; 3], f64) {
     let e = [0, 1, 2].map(|j| kappa[j] - patch.rest[j]);
     let ad = &patch.stiffness;
     let m = [0, 1, 2].map(|i| ad[i][0] * e[0] + ad[i][1] * e[1] + ad[i][2] * e[2]);
@@ -109,7 +109,7 @@ pub fn energy(patch: &Patch, x: &[[f64; 3]]) -> f64 {
 /// and Hessian into `out` (the gradient always). With `gauss_newton`, the
 /// Hessian is its Gauss–Newton part `K^T (A D') K` alone, positive
 /// semi-definite by construction: what the projected Newton asks for
-/// (`project` of `Bending::add`), without the
+/// (`project` of `Bending::add_law`), without the
 /// eigendecomposition of a matrix of up to 54 x 54 that the nearest
 /// semi-definite matrix would take.
 //
@@ -132,9 +132,16 @@ pub fn evaluate_with(
     out: &mut Local,
 ) -> f64 {
     evaluate_law(patch, x, hessian, gauss_newton, out, |kappa| {
-        let (m, energy) = moments(patch, kappa);
-        (energy, m, patch.stiffness)
+        elastic(patch, kappa)
     })
+}
+
+/// The elastic law of `patch` at curvatures `kappa`, as
+/// [`evaluate_law`] takes it: `1/2 e . A D' e`, `A D' e` and `A D'`.
+#[inline]
+pub(super) fn elastic(patch: &Patch, kappa: [f64; 3]) -> LawValue {
+    let (m, energy) = moments(patch, kappa);
+    (energy, m, patch.stiffness)
 }
 
 /// [`evaluate_with`] for an energy `psi(kappa)` of the patch's curvatures

@@ -530,37 +530,25 @@ impl Bending {
         }
     }
 
-    /// Adds the bending energy's gradient to `g` and, if given, its
-    /// Hessian to `h` (values on `pattern`, the model's
+    /// Adds the gradient of an energy of the patches' curvatures to `g`
+    /// and, if given, its Hessian to `h` (values on `pattern`, the model's
     /// [`Model::pattern`](crate::model::Model::pattern) this term was
-    /// attached to when the model was built); returns the energy (J). The
-    /// patches run colour by colour (no two of a colour share a node):
-    /// each colour in rayon's chunks on a mesh of
-    /// [`crate::model::PARALLEL_ABOVE`] elements or more, else in two
-    /// halves on `par`'s helper thread; the energies are summed in a fixed
-    /// order, so the result does not depend on the number of threads.
+    /// attached to when the model was built); returns the energy (J).
+    /// `law(k, kappa)` gives patch `k`'s energy, moments and their
+    /// derivative as [`kernel::evaluate_law`] takes them; `None`, the
+    /// elastic bending energy's (the bending term passes `None` for every
+    /// patch, the hysteresis term its own). The patches run colour by
+    /// colour (no two of a colour share a node): each colour in rayon's
+    /// chunks on a mesh of [`crate::model::PARALLEL_ABOVE`] elements or
+    /// more, else in two halves on `par`'s helper thread; the energies are
+    /// summed in a fixed order, so the result does not depend on the
+    /// number of threads.
     ///
     /// With `project`, the Hessian of every patch with a node flagged
     /// there (one flag per node) is replaced by its Gauss–Newton part `K^T
-    /// (A D') K`, positive semi-definite by construction, before it is
-    /// added (the projected Newton of `solver::newton`;
-    /// [`kernel::evaluate_with`]).
-    pub(crate) fn add(
-        &self,
-        pattern: &SparsePattern,
-        y: &[f64],
-        g: &mut [f64],
-        h: Option<&mut [f64]>,
-        project: Option<&[bool]>,
-    ) -> f64 {
-        self.add_law(pattern, y, g, h, project, &|_, _| None)
-    }
-
-    /// [`Bending::add`] for another energy of the patches' curvatures:
-    /// `law(k, kappa)` gives patch `k`'s energy, moments and their
-    /// derivative as [`kernel::evaluate_law`] takes them (`None`: the
-    /// elastic energy's). The projected patches take the Gauss–Newton part
-    /// of `law`'s Hessian.
+    /// (dM/dkappa) K` — `K^T (A D') K` for the elastic law —, positive
+    /// semi-definite where `dM/dkappa` is, before it is added (the
+    /// projected Newton of `solver::newton`; [`kernel::evaluate_with`]).
     pub(crate) fn add_law<L>(
         &self,
         pattern: &SparsePattern,
@@ -589,10 +577,7 @@ impl Bending {
                     want_h && project.is_some_and(|flags| nodes.iter().any(|&a| flags[a]));
                 energy +=
                     kernel::evaluate_law(p, &x[..len], want_h, gauss_newton, local, |kappa| {
-                        law(k, kappa).unwrap_or_else(|| {
-                            let (m, energy) = kernel::moments(p, kappa);
-                            (energy, m, p.stiffness)
-                        })
+                        law(k, kappa).unwrap_or_else(|| kernel::elastic(p, kappa))
                     });
                 // SAFETY: patches that run at once (of one colour) share no
                 // node, so the gradient entries and Hessian blocks written
@@ -773,7 +758,7 @@ mod tests {
         let run = |b: &Bending| {
             let mut g = vec![0.0; y.len()];
             let mut h = vec![0.0; pattern.nnz()];
-            let e = b.add(&pattern, &y, &mut g, Some(&mut h), None);
+            let e = b.add_law(&pattern, &y, &mut g, Some(&mut h), None, &|_, _| None);
             (e, g, h)
         };
         let (e0, g0, h0) = run(&serial);

@@ -272,27 +272,7 @@ pub(super) fn build_bending(
             ));
         }
         Some(toml::Value::Table(table)) => {
-            if let Some(k) = table
-                .keys()
-                .find(|k| !matches!(k.as_str(), "warp" | "weft"))
-            {
-                return Err(c.invalid_in(
-                    t,
-                    key,
-                    k,
-                    "is not a key of bending_rigidity (expected warp and weft, N m)".into(),
-                ));
-            }
-            let get = |name: &str| match table.get(name) {
-                Some(v) => number(v).map_err(|why| c.invalid_in(t, key, name, why)),
-                None => Err(c.invalid_in(
-                    t,
-                    key,
-                    name,
-                    "is required in a woven fabric's { warp, weft } bending rigidity".into(),
-                )),
-            };
-            let (warp, weft) = (get("warp")?, get("weft")?);
+            let [warp, weft] = warp_weft(c, (key, "N m"), table, number)?;
             (warp > 0.0 || weft > 0.0).then_some(BendingRigidity::Woven {
                 warp,
                 weft,
@@ -376,29 +356,7 @@ pub(super) fn build_hysteresis(
         }
     };
     let moment = match value {
-        toml::Value::Table(table) => {
-            if let Some(k) = table
-                .keys()
-                .find(|k| !matches!(k.as_str(), "warp" | "weft"))
-            {
-                return Err(c.invalid_in(
-                    t,
-                    key,
-                    k,
-                    "is not a key of bending_hysteresis (expected warp and weft, N m/m)".into(),
-                ));
-            }
-            let get = |name: &str| match table.get(name) {
-                Some(v) => number(v).map_err(|why| c.invalid_in(t, key, name, why)),
-                None => Err(c.invalid_in(
-                    t,
-                    key,
-                    name,
-                    "is required in a woven fabric's { warp, weft } bending hysteresis".into(),
-                )),
-            };
-            [get("warp")?, get("weft")?]
-        }
+        toml::Value::Table(table) => warp_weft(c, (key, "N m/m"), table, number)?,
         v => {
             let h = number(v).map_err(|why| {
                 c.invalid(
@@ -423,4 +381,39 @@ pub(super) fn build_hysteresis(
         ));
     }
     Ok(Some(Hysteresis { moment, rate }))
+}
+
+/// `[material] key = { warp, weft }` (in `unit`), each read by `number`:
+/// `[warp, weft]`; another key, or one missing, refused by name.
+fn warp_weft(
+    c: &Checker,
+    (key, unit): (&str, &str),
+    table: &toml::Table,
+    number: impl Fn(&toml::Value) -> Result<f64, String>,
+) -> Result<[f64; 2], ScenarioError> {
+    let t = "material";
+    if let Some(k) = table
+        .keys()
+        .find(|k| !matches!(k.as_str(), "warp" | "weft"))
+    {
+        return Err(c.invalid_in(
+            t,
+            key,
+            k,
+            format!("is not a key of {key} (expected warp and weft, {unit})"),
+        ));
+    }
+    let get = |name: &str| match table.get(name) {
+        Some(v) => number(v).map_err(|why| c.invalid_in(t, key, name, why)),
+        None => Err(c.invalid_in(
+            t,
+            key,
+            name,
+            format!(
+                "is required in a woven fabric's {{ warp, weft }} {}",
+                key.replace('_', " ")
+            ),
+        )),
+    };
+    Ok([get("warp")?, get("weft")?])
 }

@@ -49,21 +49,37 @@ impl StepTerm for BendingTerm<'_> {
         g: &mut [f64],
         h: Option<&mut [f64]>,
     ) -> TermValue {
-        self.forces.clear();
-        self.forces.resize(y.len(), 0.0);
-        let value = self
-            .bending
-            .add(self.pattern, y, &mut self.forces, h, ctx.project);
-        let mut scale = 0.0;
-        for (gi, fi) in g.iter_mut().zip(&self.forces) {
-            *gi += fi;
-            scale += fi * fi;
-        }
-        TermValue {
-            value,
-            potential: true,
-            scale: scale.sqrt(),
-        }
+        let patches = (self.bending, self.pattern);
+        add_patches(patches, &mut self.forces, (ctx, y), (g, h), &|_, _| None)
+    }
+}
+
+/// Adds an energy of `bending`'s patches' curvatures, `law` as
+/// [`Bending::add_law`] takes it (`None`: the elastic one), to `g` and
+/// `h` (on `pattern`), through `forces` (scratch): the bending term's and
+/// the hysteresis term's assembly, and their value.
+pub(super) fn add_patches<L>(
+    (bending, pattern): (&Bending, &SparsePattern),
+    forces: &mut Vec<f64>,
+    (ctx, y): (&StepContext, &[f64]),
+    (g, h): (&mut [f64], Option<&mut [f64]>),
+    law: &L,
+) -> TermValue
+where
+    L: Fn(usize, [f64; 3]) -> Option<crate::bending::kernel::LawValue> + Sync,
+{
+    forces.clear();
+    forces.resize(y.len(), 0.0);
+    let value = bending.add_law(pattern, y, forces, h, ctx.project, law);
+    let mut scale = 0.0;
+    for (gi, fi) in g.iter_mut().zip(forces.iter()) {
+        *gi += fi;
+        scale += fi * fi;
+    }
+    TermValue {
+        value,
+        potential: true,
+        scale: scale.sqrt(),
     }
 }
 
@@ -72,7 +88,7 @@ mod tests {
     use super::*;
     use crate::bending::BendingRigidity;
     use crate::element::membrane::Section;
-    use crate::integrator::terms::check_term;
+    use crate::integrator::terms::{check_term, folded};
     use crate::material::SaintVenantKirchhoff;
     use crate::mesh::generate::{Pattern, rectangle};
     use crate::mesh::{ElementOrder, Mesh};
@@ -94,36 +110,6 @@ mod tests {
             320.0,
         )
         .bending(rigidity)
-    }
-
-    /// A 10 cm square (4 x 3 squares, alternating diagonals) of `order`,
-    /// folded: `fold` scales a deformation that stretches, shears and
-    /// rolls the sheet up (0: flat; 1: about a right angle of folding;
-    /// 3: folded nearly onto itself).
-    fn folded(model: &Model, fold: f64) -> Vec<f64> {
-        // Rolled onto a cylinder of curvature k about the y axis (k = 15
-        // 1/m per unit `fold`: a right angle over the 10 cm at fold 1),
-        // then stretched, sheared and rippled.
-        let k = 15.0 * fold;
-        let roll = |s: f64| {
-            if k == 0.0 {
-                (s, 0.0)
-            } else {
-                ((k * s).sin() / k, (1.0 - (k * s).cos()) / k)
-            }
-        };
-        model
-            .initial_positions()
-            .chunks(3)
-            .flat_map(|x| {
-                let (u, w) = roll(x[0] + 0.05);
-                [
-                    1.01 * u + 0.01 * x[1],
-                    x[1] + 0.02 * x[0] * x[1],
-                    w + 0.01 * fold.min(1.0) * (30.0 * x[1]).sin(),
-                ]
-            })
-            .collect()
     }
 
     /// Energy, gradient and Hessian against central differences, flat,

@@ -3,6 +3,7 @@
 //! (the formulas, the law and the citations: [`crate::bending::hysteresis`]).
 
 use super::super::potential::{Stencils, StepContext, StepTerm, TermValue};
+use super::bending::add_patches;
 use crate::bending::Bending;
 use crate::bending::hysteresis::Hysteresis;
 use crate::solver::SparsePattern;
@@ -74,33 +75,20 @@ impl StepTerm for HysteresisTerm<'_> {
         g: &mut [f64],
         h: Option<&mut [f64]>,
     ) -> TermValue {
-        self.forces.clear();
-        self.forces.resize(y.len(), 0.0);
         let patches = self.bending.patches();
         let (law, start, smooth) = (&self.law, &self.start, self.smooth);
         let dissipated = &self.dissipated;
-        let value = self.bending.add_law(
-            self.pattern,
-            y,
+        add_patches(
+            (self.bending, self.pattern),
             &mut self.forces,
-            h,
-            ctx.project,
+            (ctx, y),
+            (g, h),
             &|k, kappa| {
                 let (moments, work) = law.patch(patches[k].area, start[k], kappa, smooth);
                 dissipated[k].store(work.to_bits(), Ordering::Relaxed);
                 Some(moments)
             },
-        );
-        let mut scale = 0.0;
-        for (gi, fi) in g.iter_mut().zip(&self.forces) {
-            *gi += fi;
-            scale += fi * fi;
-        }
-        TermValue {
-            value,
-            potential: true,
-            scale: scale.sqrt(),
-        }
+        )
     }
 
     fn dissipation(&self) -> f64 {
@@ -115,35 +103,11 @@ mod tests {
     use super::*;
     use crate::bending::BendingRigidity;
     use crate::element::membrane::Section;
-    use crate::integrator::terms::check_term;
+    use crate::integrator::terms::{check_term, folded};
     use crate::material::SaintVenantKirchhoff;
     use crate::mesh::ElementOrder;
     use crate::mesh::generate::{Pattern, rectangle};
     use crate::model::Model;
-
-    /// A sheet rolled and waved by `fold` (0: flat).
-    fn folded(model: &Model, fold: f64) -> Vec<f64> {
-        let k = 15.0 * fold;
-        let roll = |s: f64| {
-            if k == 0.0 {
-                (s, 0.0)
-            } else {
-                ((k * s).sin() / k, (1.0 - (k * s).cos()) / k)
-            }
-        };
-        model
-            .initial_positions()
-            .chunks(3)
-            .flat_map(|x| {
-                let (u, w) = roll(x[0] + 0.05);
-                [
-                    1.01 * u + 0.01 * x[1],
-                    x[1] + 0.02 * x[0] * x[1],
-                    w + 0.01 * fold.min(1.0) * (30.0 * x[1]).sin(),
-                ]
-            })
-            .collect()
-    }
 
     /// The term's gradient and Hessian against finite differences, from a
     /// flat and a rolled start, for changes within the smoothing and

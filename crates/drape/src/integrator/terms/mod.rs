@@ -30,7 +30,7 @@ pub use self_friction::SelfFrictionTerm;
 
 #[cfg(test)]
 pub(crate) use check::{
-    check_projection, check_term, contact_patch, deformed, dense_hessian, patch_builder,
+    check_projection, check_term, contact_patch, deformed, dense_hessian, folded, patch_builder,
     patch_model, relative_smallest_eigenvalue,
 };
 
@@ -45,6 +45,36 @@ mod check {
     use crate::mesh::generate::{Pattern, rectangle};
     use crate::model::{Model, ModelBuilder};
     use crate::solver::SparsePattern;
+
+    /// A 10 cm square (4 x 3 squares, alternating diagonals) of `order`,
+    /// folded: `fold` scales a deformation that stretches, shears and
+    /// rolls the sheet up (0: flat; 1: about a right angle of folding;
+    /// 3: folded nearly onto itself).
+    pub(crate) fn folded(model: &Model, fold: f64) -> Vec<f64> {
+        // Rolled onto a cylinder of curvature k about the y axis (k = 15
+        // 1/m per unit `fold`: a right angle over the 10 cm at fold 1),
+        // then stretched, sheared and rippled.
+        let k = 15.0 * fold;
+        let roll = |s: f64| {
+            if k == 0.0 {
+                (s, 0.0)
+            } else {
+                ((k * s).sin() / k, (1.0 - (k * s).cos()) / k)
+            }
+        };
+        model
+            .initial_positions()
+            .chunks(3)
+            .flat_map(|x| {
+                let (u, w) = roll(x[0] + 0.05);
+                [
+                    1.01 * u + 0.01 * x[1],
+                    x[1] + 0.02 * x[0] * x[1],
+                    w + 0.01 * fold.min(1.0) * (30.0 * x[1]).sin(),
+                ]
+            })
+            .collect()
+    }
 
     /// A 10 cm square of 3 x 2 squares (12 triangles) of `order` (1–3),
     /// 0.6 mm thick, 320 kg/m^3, with `loads`.
