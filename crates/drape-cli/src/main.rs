@@ -247,6 +247,7 @@ fn main() -> ExitCode {
 /// hysteresis; `None` without bending.
 fn bending_line(m: &drape::model::Model) -> Option<String> {
     use drape::bending::BendingRigidity;
+    use drape::bending::hysteresis::Hold;
     let rigidity = match m.bending()?.rigidity {
         BendingRigidity::Isotropic(b) => format!("B = {b:.4e} N m"),
         BendingRigidity::Woven { warp, weft, .. } => {
@@ -274,10 +275,14 @@ fn bending_line(m: &drape::model::Model) -> Option<String> {
             } else {
                 format!("{warp:.4e} N m/m warp, {weft:.4e} N m/m weft")
             };
-            format!(
-                "; hysteresis HB = {moment}, creeping below {} 1/(m s)",
-                human(h.rate)
-            )
+            let hold = match h.hold {
+                Hold::Creep { rate } => format!("creeping below {} 1/(m s)", human(rate)),
+                Hold::Stick { stiffness } => format!(
+                    "held by a stick of {stiffness:.4e} N m (slips past {:.4} 1/m)",
+                    h.smoothing(0.0) / h.moment[0].max(h.moment[1])
+                ),
+            };
+            format!("; hysteresis HB = {moment}, {hold}")
         })
         .unwrap_or_default();
     Some(format!("{rigidity}{length}{hysteresis}"))

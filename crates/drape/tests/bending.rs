@@ -8,7 +8,7 @@
 mod support;
 
 use drape::bending::BendingRigidity;
-use drape::bending::hysteresis::Hysteresis;
+use drape::bending::hysteresis::{Hold, Hysteresis};
 use drape::element::geometry::MembraneIntegration;
 use drape::element::membrane::Section;
 use drape::integrator::newmark::DynamicWorkspace;
@@ -515,10 +515,80 @@ fn cantilever_small_deflection_matches_beam_theory() {
 fn a_cantilever_with_bending_hysteresis_matches_grosbergs_closed_form() {
     let (l, divisions): (f64, usize) = (0.2, 40);
     let b = Q * l.powi(3) / 0.01;
-    let h = l / divisions as f64;
-    let free = l - 0.5 * h;
+    let free = l - 0.5 * l / divisions as f64;
     let s0 = 0.5 * free;
     let hb = 0.5 * Q * s0 * s0;
+    let hold = Hold::Creep { rate: 1e-5 };
+    let (w, its) = hysteretic_cantilever(
+        l,
+        divisions,
+        b,
+        Hysteresis {
+            moment: [hb, hb],
+            hold,
+        },
+    );
+    let exact =
+        (Q * (free.powi(4) - s0.powi(4)) / 8.0 - hb * (free.powi(2) - s0.powi(2)) / 2.0) / b;
+    let elastic = Q * free.powi(4) / (8.0 * b);
+    let e = (w - exact) / exact;
+    eprintln!(
+        "hysteresis: {w:.5e} m against {exact:.5e} m ({:+.2} %), elastic {elastic:.5e} m; iterations {its:?}",
+        100.0 * e
+    );
+    assert!(e.abs() < 0.03);
+}
+
+/// The same with a stick of stiffness `k = B` (a Jenkins element beside
+/// the rigidity): a section bends on `B + k` until its moment reaches
+/// `M_y = HB (B + k) / k` and on `B` after, `kappa = (M - HB) / B`; within
+/// `u_y = sqrt(2 M_y / q)` of the tip it is on its spring. The tip
+/// deflects by `q u_y^4 / (8 (B + k)) + (q (L^4 - u_y^4) / 8 - HB (L^2 -
+/// u_y^2) / 2) / B`, loaded in 20 static increments (the plastic
+/// curvatures carried from one to the next).
+#[test]
+fn a_cantilever_with_a_stick_hysteresis_matches_the_jenkins_closed_form() {
+    let (l, divisions): (f64, usize) = (0.2, 40);
+    let b = Q * l.powi(3) / 0.01;
+    let free = l - 0.5 * l / divisions as f64;
+    let hb = 0.5 * Q * (0.5 * free).powi(2);
+    let k = b;
+    let hold = Hold::Stick { stiffness: k };
+    let (w, its) = hysteretic_cantilever(
+        l,
+        divisions,
+        b,
+        Hysteresis {
+            moment: [hb, hb],
+            hold,
+        },
+    );
+    let uy = (2.0 * hb * (b + k) / k / Q).sqrt();
+    let exact = Q * uy.powi(4) / (8.0 * (b + k))
+        + (Q * (free.powi(4) - uy.powi(4)) / 8.0 - hb * (free.powi(2) - uy.powi(2)) / 2.0) / b;
+    let rigid = (Q * (free.powi(4) - (0.5 * free).powi(4)) / 8.0
+        - hb * (free.powi(2) - (0.5 * free).powi(2)) / 2.0)
+        / b;
+    let e = (w - exact) / exact;
+    eprintln!(
+        "stick: {w:.5e} m against {exact:.5e} m ({:+.2} %), a rigid stick's {rigid:.5e} m; iterations {its:?}",
+        100.0 * e
+    );
+    assert!(e.abs() < 0.03);
+    // The spring's share is visible: the rigid stick's deflection differs.
+    assert!((rigid - exact).abs() > 0.1 * exact);
+}
+
+/// The tip deflection of the strip of [`cantilever`] (union jack, `l`,
+/// `divisions`) with rigidity `b` and `hysteresis`, loaded in 20 static
+/// increments; the Newton iterations of each.
+fn hysteretic_cantilever(
+    l: f64,
+    divisions: usize,
+    b: f64,
+    hysteresis: Hysteresis,
+) -> (f64, Vec<usize>) {
+    let h = l / divisions as f64;
     let (mesh, _, fixed, tip) = strip(
         l,
         [divisions, 4],
@@ -526,10 +596,6 @@ fn a_cantilever_with_bending_hysteresis_matches_grosbergs_closed_form() {
         ElementOrder::Linear,
         h,
     );
-    let hysteresis = Hysteresis {
-        moment: [hb, hb],
-        rate: 1e-5,
-    };
     let m = membrane_builder(
         mesh,
         (2e6, 6e-4, 320.0, 9.81),
@@ -542,15 +608,7 @@ fn a_cantilever_with_bending_hysteresis_matches_grosbergs_closed_form() {
     .unwrap();
     let (y, its) = equilibrium_to(&m, 20, 1e-10).expect("each increment converges");
     let w = -tip.iter().map(|&a| y[3 * a + 2]).sum::<f64>() / tip.len() as f64;
-    let exact =
-        (Q * (free.powi(4) - s0.powi(4)) / 8.0 - hb * (free.powi(2) - s0.powi(2)) / 2.0) / b;
-    let elastic = Q * free.powi(4) / (8.0 * b);
-    let e = (w - exact) / exact;
-    eprintln!(
-        "hysteresis: {w:.5e} m against {exact:.5e} m ({:+.2} %), elastic {elastic:.5e} m; iterations {its:?}",
-        100.0 * e
-    );
-    assert!(e.abs() < 0.03);
+    (w, its)
 }
 
 /// Large deflection (q L^3 / B = 15, the tip 79 % of the length below the

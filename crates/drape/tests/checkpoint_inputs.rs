@@ -325,11 +325,14 @@ fn as_version_3(bytes: &[u8]) -> Vec<u8> {
     // refinement, no level, nothing pending (three counts of 0).
     assert_eq!(bytes[at..at + 24], [0; 24], "no levels");
     at += 24;
-    // Version 11's discarded iterations end the body (a u64), after
-    // version 9's cavities (none here: a count of 0), after version 7's
+    // Version 12's plastic curvatures end the body (none here: a count of
+    // 0), after version 11's discarded iterations (a u64), after version
+    // 9's cavities (none here: a count of 0), after version 7's
     // self-contact layout (none: a count of 0), after version 6's kept
     // linear-solver state: a direct solve keeps nothing, its two flags 0.
-    let gas = bytes.len() - 8 - 8 - 8;
+    let plastic = bytes.len() - 8 - 8;
+    assert_eq!(bytes[plastic..plastic + 8], [0; 8], "no plastic curvatures");
+    let gas = plastic - 8 - 8;
     assert_eq!(bytes[gas..gas + 8], [0; 8], "no cavities");
     let layout = gas - 8;
     assert_eq!(bytes[layout..layout + 8], [0; 8], "no self-contact layout");

@@ -28,6 +28,7 @@
 //! The tolerance, 5e-7 relative, is the hand values' rounding to seven
 //! significant digits (half a unit of the seventh).
 
+use drape::bending::hysteresis::Hold;
 use drape::scenario::{Scenario, ScenarioError};
 use std::path::Path;
 
@@ -222,7 +223,23 @@ fn kes_bending_hysteresis_by_hand() {
     let law = setup.model.bending_hysteresis().expect("a hysteresis");
     close(law.moment[0], 6.080123e-4);
     close(law.moment[1], 4.903325e-4);
-    assert_eq!(law.rate, drape::bending::hysteresis::DEFAULT_RATE);
+    assert_eq!(
+        law.hold,
+        Hold::Creep {
+            rate: drape::bending::hysteresis::DEFAULT_RATE
+        }
+    );
+    // With a stick's stiffness, held by it.
+    let stuck = text.replace(
+        "poisson_ratio = 0.3",
+        "poisson_ratio = 0.3\nbending_hysteresis_stiffness = 2e-4",
+    );
+    let setup = parse(&stuck)
+        .unwrap()
+        .build(Path::new("fabric.toml"), &stuck)
+        .unwrap();
+    let law = setup.model.bending_hysteresis().expect("a hysteresis");
+    assert_eq!(law.hold, Hold::Stick { stiffness: 2e-4 });
     // Without 2HB, none.
     let plain = scenario(KES);
     let s = parse(&plain).unwrap();
@@ -240,7 +257,28 @@ fn bad_hysteresis_is_named_with_its_unit() {
             &format!("poisson_ratio = 0.3\n{material}"),
         )
     };
-    let cases: [(String, &[&str]); 6] = [
+    let cases: [(String, &[&str]); 9] = [
+        (
+            with("bending_hysteresis = 1e-4\nbending_hysteresis_stiffness = -1e-4"),
+            &["`material.bending_hysteresis_stiffness`", "-0.0001", "N m"],
+        ),
+        (
+            with(
+                "bending_hysteresis = 1e-4\nbending_hysteresis_stiffness = 1e-4\nbending_hysteresis_rate = 1.0",
+            ),
+            &[
+                "`material.bending_hysteresis_stiffness`",
+                "bending_hysteresis_rate",
+                "give one",
+            ],
+        ),
+        (
+            with("bending_hysteresis_stiffness = 1e-4"),
+            &[
+                "`material.bending_hysteresis_stiffness`",
+                "only with a bending_hysteresis",
+            ],
+        ),
         (
             with("bending_hysteresis = -1e-4"),
             &["`material.bending_hysteresis`", "-0.0001", "N m/m"],

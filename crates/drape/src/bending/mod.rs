@@ -502,6 +502,19 @@ impl Bending {
         &self.patches
     }
 
+    /// Each patch's curvatures `kappa` (1/m, Voigt, in its frame) at the
+    /// positions `y` (flattened).
+    pub fn curvatures(&self, y: &[f64]) -> Vec<[f64; 3]> {
+        let mut x = [[0.0; 3]; kernel::MAX_NODES];
+        self.patches
+            .iter()
+            .map(|p| {
+                p.positions(|a| [y[3 * a], y[3 * a + 1], y[3 * a + 2]], &mut x);
+                p.curvature(&x[..p.len()])
+            })
+            .collect()
+    }
+
     /// Records where each patch's Hessian blocks lie in `pattern` (which
     /// must include the stencils), and how the assembly runs: in two
     /// halves of the patches (at the reference positions `nodes`) on two

@@ -10,6 +10,7 @@ pub mod terms;
 
 pub use newmark::Newmark;
 pub use statics::StaticStepper;
+pub(crate) use terms::plastic_count;
 
 use crate::contact::lagrange::{ActiveNode, MAX_ACTIVE_SET_ROUNDS, REVISIONS_IN_NEWTON};
 use crate::contact::{ContactMethod, ContactModel, ContactState};
@@ -52,6 +53,10 @@ pub struct State {
     pub contact: Option<ContactState>,
     /// The gas of each of the model's cavities (none without).
     pub gas: Vec<GasState>,
+    /// Each bending patch's plastic curvature (1/m, Voigt, in its frame)
+    /// with a stick hysteresis ([`crate::bending::hysteresis`], "The
+    /// stick"); empty otherwise.
+    pub plastic: Vec<[f64; 3]>,
 }
 
 impl State {
@@ -64,6 +69,7 @@ impl State {
             .iter()
             .map(|c| c.initial_state(&positions))
             .collect();
+        let plastic = terms::initial_plastic(model, &positions);
         Self {
             time: 0.0,
             positions,
@@ -74,6 +80,7 @@ impl State {
             friction_dissipation: 0.0,
             contact,
             gas,
+            plastic,
         }
     }
 }
@@ -173,7 +180,9 @@ impl NewtonSystem for StepSystem<'_> {
             }
         }
         self.strain_energy = self.potential.value("membrane").map_or(0.0, |v| v.value);
-        self.bending_energy = self.potential.value("bending").map_or(0.0, |v| v.value);
+        // (With a stick hysteresis, its springs' energy too.)
+        self.bending_energy =
+            self.potential.value("bending").map_or(0.0, |v| v.value) + self.potential.stored();
         self.self_contact_energy = self
             .potential
             .value("self-contact")
@@ -345,6 +354,8 @@ pub(crate) struct StepTerms<'a> {
     pub friction: FrictionLag<'a>,
     /// The gas of each cavity over the step (none without cavities).
     pub gas: &'a [GasStep],
+    /// The bending patches' plastic curvatures ([`State::plastic`]).
+    pub plastic: &'a [[f64; 3]],
 }
 
 /// Where a step's friction takes its normal forces and tangent planes
@@ -381,13 +392,15 @@ fn step_potential<'a>(
     let mut list: Vec<Box<dyn StepTerm + 'a>> = vec![Box::new(MembraneTerm::new(model))];
     if let Some(bending) = model.bending() {
         list.push(Box::new(BendingTerm::new(bending, model.pattern())));
-        // Its hysteresis over the step, from the step's start.
+        // Its hysteresis over the step, from the step's start or the
+        // plastic curvatures.
         if let (Some(law), Some(start)) = (model.bending_hysteresis(), terms.start) {
             list.push(Box::new(HysteresisTerm::new(
                 bending,
                 law,
                 model.pattern(),
                 start,
+                terms.plastic,
             )));
         }
     }

@@ -255,6 +255,7 @@ impl Newmark {
             start: Some((&state.positions, dt)),
             friction: FrictionLag::Start,
             gas: &gas,
+            plastic: &state.plastic,
         };
         let settings = &NewtonSettings {
             dt: Some(dt),
@@ -283,6 +284,7 @@ impl Newmark {
             work += 0.5 * (old_ext[i] + ws.f_ext[i]) * (y[i] - state.positions[i]);
         }
         work += end_gas_steps(model, &gas, &ws.y, state) + energies.obstacles;
+        super::terms::slip(model, &ws.y, &mut state.plastic);
         state.persistence = persistence(&state.accelerations, &ws.q, &mut ws.ratios);
         state.accelerations.copy_from_slice(&ws.q);
         std::mem::swap(&mut state.positions, &mut ws.y);

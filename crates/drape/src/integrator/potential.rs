@@ -130,6 +130,12 @@ pub trait StepTerm {
         0.0
     }
 
+    /// The energy the term stores at its last evaluation (J), counted with
+    /// the bending energy: bending hysteresis's stick springs. Default 0.
+    fn stored(&self) -> f64 {
+        0.0
+    }
+
     /// The work the moving obstacles did on the fabric through the term
     /// over the step, at its last evaluation (J): friction's force at the
     /// step's end on each node, dotted with its obstacle's displacement
@@ -255,6 +261,11 @@ impl<'a> IncrementalPotential<'a> {
     /// evaluation (J).
     pub fn dissipation(&self) -> f64 {
         self.terms.iter().map(|t| t.dissipation()).sum()
+    }
+
+    /// [`StepTerm::stored`] summed over the terms (J).
+    pub fn stored(&self) -> f64 {
+        self.terms.iter().map(|t| t.stored()).sum()
     }
 
     /// [`StepTerm::obstacle_work`] summed over the terms (J).

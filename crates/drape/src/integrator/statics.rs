@@ -166,6 +166,7 @@ impl StaticStepper {
                 start: Some((&state.positions, dlambda)),
                 friction,
                 gas: &gas,
+                plastic: &state.plastic,
             };
             let solved = solve_increment(
                 self.relax,
@@ -221,6 +222,7 @@ impl StaticStepper {
             work += 0.5 * (ws.old_ext[i] + ws.f_ext[i]) * (ws.y[i] - state.positions[i]);
         }
         work += end_gas_steps(model, &gas, &ws.y, state) + energies.obstacles;
+        super::terms::slip(model, &ws.y, &mut state.plastic);
         std::mem::swap(&mut state.positions, &mut ws.y);
         state.time = from + lambda;
         state.external_work += work;

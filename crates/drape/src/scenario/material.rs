@@ -312,34 +312,66 @@ pub(super) fn build_bending(
     Ok(value)
 }
 
-/// `[material] bending_hysteresis` and `bending_hysteresis_rate` (README,
-/// "Scenario reference", `[material]`): `None` for none (the default, or
-/// `HB` 0). Needs a bending rigidity (`bending`).
+/// `[material] bending_hysteresis`, `bending_hysteresis_rate` and
+/// `bending_hysteresis_stiffness` (README, "Scenario reference",
+/// `[material]`): `None` for none (the default, or `HB` 0). Needs a
+/// bending rigidity (`bending`).
 pub(super) fn build_hysteresis(
     c: &Checker,
     m: &MaterialSpec,
     bending: Option<&BendingRigidity>,
 ) -> Result<Option<crate::bending::hysteresis::Hysteresis>, ScenarioError> {
-    use crate::bending::hysteresis::{DEFAULT_RATE, Hysteresis};
+    use crate::bending::hysteresis::{DEFAULT_RATE, Hold, Hysteresis};
     let t = "material";
     let key = "bending_hysteresis";
-    let rate = m.bending_hysteresis_rate.unwrap_or(DEFAULT_RATE);
-    if !(rate.is_finite() && rate > 0.0) {
-        return Err(c.invalid(
-            t,
-            None,
-            "bending_hysteresis_rate",
-            format!("must be a finite number > 0 (1/(m s)), not {rate}"),
-        ));
-    }
-    let Some(value) = &m.bending_hysteresis else {
-        if m.bending_hysteresis_rate.is_some() {
+    let positive = |name: &str, v: f64, unit: &str| {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(c.invalid(
+                t,
+                None,
+                name,
+                format!("must be a finite number > 0 ({unit}), not {v}"),
+            ))
+        }
+    };
+    let hold = match (m.bending_hysteresis_rate, m.bending_hysteresis_stiffness) {
+        (Some(_), Some(_)) => {
             return Err(c.invalid(
                 t,
                 None,
-                "bending_hysteresis_rate",
-                "applies only with a bending_hysteresis (N m/m)".into(),
+                "bending_hysteresis_stiffness",
+                "and bending_hysteresis_rate are two holds of the frictional moment (a stick spring, a creep): give one".into(),
             ));
+        }
+        (rate, None) => Hold::Creep {
+            rate: positive(
+                "bending_hysteresis_rate",
+                rate.unwrap_or(DEFAULT_RATE),
+                "1/(m s)",
+            )?,
+        },
+        (None, Some(k)) => Hold::Stick {
+            stiffness: positive("bending_hysteresis_stiffness", k, "N m")?,
+        },
+    };
+    let Some(value) = &m.bending_hysteresis else {
+        for (given, name) in [
+            (m.bending_hysteresis_rate, "bending_hysteresis_rate"),
+            (
+                m.bending_hysteresis_stiffness,
+                "bending_hysteresis_stiffness",
+            ),
+        ] {
+            if given.is_some() {
+                return Err(c.invalid(
+                    t,
+                    None,
+                    name,
+                    "applies only with a bending_hysteresis (N m/m)".into(),
+                ));
+            }
         }
         return Ok(None);
     };
@@ -380,7 +412,7 @@ pub(super) fn build_hysteresis(
             "is the frictional moment of bending, and this fabric does not bend: give a bending_rigidity (N m) too".into(),
         ));
     }
-    Ok(Some(Hysteresis { moment, rate }))
+    Ok(Some(Hysteresis { moment, hold }))
 }
 
 /// `[material] key = { warp, weft }` (in `unit`), each read by `number`:

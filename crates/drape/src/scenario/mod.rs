@@ -254,6 +254,12 @@ pub struct MaterialSpec {
     /// [`crate::bending::hysteresis::DEFAULT_RATE`].
     #[serde(default)]
     pub bending_hysteresis_rate: Option<f64>,
+    /// The bending stiffness of bending hysteresis's stick spring (N m, a
+    /// number above 0), along the direction of the larger `HB`: a Jenkins element,
+    /// whose curvature does not creep (`crate::bending::hysteresis`, "The
+    /// stick"); instead of `bending_hysteresis_rate`. Default none.
+    #[serde(default)]
+    pub bending_hysteresis_stiffness: Option<f64>,
     /// The warp direction in the initial configuration (projected on each
     /// element's plane), default `[1, 0, 0]`: the axes of the orthotropic
     /// model and of a woven `bending_rigidity`.

@@ -36,6 +36,10 @@
 //! changed, naming it. A path is kept as the bytes of the operating
 //! system's string (Unix), so that any path survives.
 //!
+//! Version 12 ends, after the discarded iterations, with the bending
+//! patches' plastic curvatures of a stick hysteresis (count u64, then 3
+//! f64 each; [`State::plastic`]); an older file has none (and had no stick
+//! hysteresis to keep).
 //! Version 11 ends, after the gas, with the Newton iterations of the
 //! solves the run threw away (u64; [`Counters::discarded_iterations`]);
 //! an older file is read with 0 of them (the resumed summary then counts
@@ -82,7 +86,7 @@ use crate::solver::{KeptFactor, KeptLinear, KeptMultigrid, LinearStats};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"DRAPECKP";
-const VERSION: u32 = 11;
+const VERSION: u32 = 12;
 
 /// Longest key of an input file (bytes).
 const MAX_KEY_BYTES: usize = 256;
@@ -506,6 +510,10 @@ impl Checkpoint {
             }
         }
         b.extend_from_slice(&(c.discarded_iterations as u64).to_le_bytes());
+        b.extend_from_slice(&(s.plastic.len() as u64).to_le_bytes());
+        for v in s.plastic.iter().flatten() {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
         let hash = fnv1a(&b);
         b.extend_from_slice(&hash.to_le_bytes());
         b
@@ -745,6 +753,26 @@ impl Checkpoint {
         if version >= 11 {
             counters.discarded_iterations = r.usize("discarded Newton iterations")?;
         }
+        // (Version 12: the plastic curvatures; none before.)
+        let plastic = if version >= 12 {
+            let count = r.usize("plastic curvature count")?;
+            if count > r.remaining() / 24 {
+                return Err(invalid(format!(
+                    "plastic curvature count {count} beyond the file"
+                )));
+            }
+            (0..count)
+                .map(|_| {
+                    Ok([
+                        r.f64("plastic curvature")?,
+                        r.f64("plastic curvature")?,
+                        r.f64("plastic curvature")?,
+                    ])
+                })
+                .collect::<Result<Vec<_>, CheckpointError>>()?
+        } else {
+            Vec::new()
+        };
         if r.remaining() != 0 {
             return Err(invalid(format!("{} trailing bytes", r.remaining())));
         }
@@ -762,6 +790,7 @@ impl Checkpoint {
                 friction_dissipation,
                 contact,
                 gas,
+                plastic,
             },
             external_forces,
             frames,
@@ -778,6 +807,16 @@ impl Checkpoint {
     fn check_values(&self) -> Result<(), CheckpointError> {
         let c = &self.counters;
         let s = &self.state;
+        if let Some(k) = s
+            .plastic
+            .iter()
+            .position(|p| !p.iter().all(|v| v.is_finite()))
+        {
+            return Err(invalid(format!(
+                "patch {k}'s plastic curvature {:?} is not finite",
+                s.plastic[k]
+            )));
+        }
         for (k, g) in s.gas.iter().enumerate() {
             let sound = [
                 g.mass,
@@ -921,6 +960,14 @@ impl Checkpoint {
             format!(
                 "{} cavities' gas, the scenario has {cavities} cavities",
                 self.state.gas.len()
+            ),
+        )?;
+        let patches = crate::integrator::plastic_count(&setup.model);
+        refuse(
+            self.state.plastic.len() == patches,
+            format!(
+                "{} plastic curvatures, the scenario's stick hysteresis has {patches} patches",
+                self.state.plastic.len()
             ),
         )?;
         let c = &self.counters;
@@ -1402,6 +1449,7 @@ mod tests {
                     inflow: 2e-4,
                     outflow: 1e-4,
                 }],
+                plastic: vec![[0.5, -2.0, 0.25], [0.0, 1e-3, -7.0]],
             },
             external_forces: v(4.0),
             frames: vec![(0.0, 0), (0.2, 7)],
@@ -1527,6 +1575,13 @@ mod tests {
     /// persistence too).
     fn as_version(c: &Checkpoint, version: u32) -> Vec<u8> {
         let bytes = c.to_bytes();
+        // Version 11: without the plastic curvatures, last before the
+        // checksum.
+        let plastic = 8 + 24 * c.state.plastic.len();
+        let bytes = seal(bytes[..bytes.len() - 8 - plastic].to_vec(), 11);
+        if version == 11 {
+            return bytes;
+        }
         // Version 10: without the discarded iterations, last before the
         // checksum.
         let bytes = seal(bytes[..bytes.len() - 8 - 8].to_vec(), 10);
@@ -1607,7 +1662,8 @@ mod tests {
         seal(old, version)
     }
 
-    /// Version 10 resumes with no discarded iterations counted; version 8
+    /// Version 11 resumes with no plastic curvatures; version 10 with no
+    /// discarded iterations counted; version 8
     /// without gas (no cavities then); version 6 with no self-contact layout; version 5 with
     /// nothing kept by the linear solver; version 4
     /// with no friction dissipated; version 3 without
@@ -1619,6 +1675,10 @@ mod tests {
     fn reads_older_versions_with_defaults_for_the_new_fields() {
         let c = sample(true);
         let mut expected = c.clone();
+        // Version 11: no plastic curvatures.
+        expected.state.plastic = Vec::new();
+        let v11 = Checkpoint::from_bytes(&as_version(&c, 11), 6, 2, 0xdead_beef).unwrap();
+        assert_eq!(v11, expected);
         // Version 10: no discarded iterations counted.
         expected.counters.discarded_iterations = 0;
         let v10 = Checkpoint::from_bytes(&as_version(&c, 10), 6, 2, 0xdead_beef).unwrap();
@@ -1838,8 +1898,18 @@ mod tests {
         // multigrid flag, its matrix's length and values, its 3 counters;
         // the factor's flag, length and values.
         // The self-contact layout, last: a node beyond the mesh's two.
+        // The plastic curvatures, last before the checksum.
+        let plastic_at = bytes.len() - 8 - 8 - 24 * c.state.plastic.len();
+        says(
+            &forge(plastic_at, &u64::MAX.to_le_bytes()),
+            "plastic curvature count 18446744073709551615 beyond the file",
+        );
+        says(
+            &forge(plastic_at + 8 + 24 + 8, &f64::NAN.to_le_bytes()),
+            "patch 1's plastic curvature [0.0, NaN, -7.0] is not finite",
+        );
         // The gas, before the discarded iterations' count (u64).
-        let gas_at = bytes.len() - 8 - 8 - gas_len(&c);
+        let gas_at = plastic_at - 8 - gas_len(&c);
         says(
             &forge(gas_at, &u64::MAX.to_le_bytes()),
             "cavity count 18446744073709551615 beyond the file",
