@@ -13,6 +13,9 @@
 #   matsudaira-hysteresis
 #                   the four fabrics with their measured bending hysteresis,
 #                   [material.kes] 2HB (Table 1; the files leave it out)
+#   matsudaira-stick
+#                   the same, the moment held by a stick spring of STICK
+#                   (default 4) times the fabric's B instead of the creep
 #   library         the six Petrak et al. 2025 files on converged meshes:
 #                   each file with [refine] levels = 4 along the folds, the
 #                   rim and the contact line, tolerance 0.01
@@ -111,6 +114,19 @@ for set in "${@:-matsudaira}"; do
             "examples/fabrics/$stem.toml" >"$with"
         test_one "hysteresis-$stem" "$dc" "$nodes" "$with"
       done <<<"$matsudaira" ;;
+    matsudaira-stick)
+      # As matsudaira-hysteresis, the frictional moment held by a stick of
+      # STICK (default 4) times the fabric's larger KES B
+      # (bending_hysteresis_stiffness, N m; 1 gf cm^2/cm = 9.80665e-5 N m).
+      while read -r stem dc nodes; do
+        hb=$(awk -v s="$stem" '$1 == s { print $2 }' <<<"$hysteresis")
+        k=$(awk -v r="${STICK:-4}" -F'[={},]' '/^B = / { b = ($4 + 0 > $6 + 0 ? $4 + 0 : $6 + 0); printf "%.4e", r * b * 9.80665e-5 }' "examples/fabrics/$stem.toml")
+        with="$work/stick-$stem.toml"
+        sed -e "s/^\[material.kes\]\$/[material.kes]\n2HB = { warp = $hb, weft = $hb }   # gf cm\/cm/" \
+            -e "s/^\[material\]\$/[material]\nbending_hysteresis_stiffness = $k   # N m/" \
+            "examples/fabrics/$stem.toml" >"$with"
+        test_one "stick-$stem" "$dc" "$nodes" "$with"
+      done <<<"$matsudaira" ;;
     library)
       while read -r stem dc; do
         converged="$work/converged-$stem.toml"
@@ -124,6 +140,6 @@ tolerance = 0.01
 TOML
         test_one "converged-$stem" "$dc" "?" "$converged"
       done <<<"$library" ;;
-    *) echo "unknown set '$set' (matsudaira, matsudaira-iso, matsudaira-hysteresis, library)" >&2; exit 2 ;;
+    *) echo "unknown set '$set' (matsudaira, matsudaira-iso, matsudaira-hysteresis, matsudaira-stick, library)" >&2; exit 2 ;;
   esac
 done

@@ -467,7 +467,10 @@ impl Bending {
                 }
             })?;
             // None: all three edges free, a lone triangle cannot bend.
-            patches.extend(patch);
+            patches.extend(patch.map(|mut p| {
+                p.element = neighbours.owner[t];
+                p
+            }));
         }
         let mut ptr = Vec::with_capacity(patches.len() + 1);
         let mut nodes = Vec::new();

@@ -81,6 +81,12 @@ pub struct Patch {
     pub area: f64,
     /// How many of its edges are clamped.
     pub clamped_edges: u8,
+    /// The frame `(e_1, e_2)` of its curvatures, in the reference
+    /// configuration.
+    pub frame: [[f64; 3]; 2],
+    /// The mesh element the triangle belongs to (set by
+    /// [`super::Bending::new`]).
+    pub element: usize,
 }
 
 /// Why a patch cannot be fitted.
@@ -218,6 +224,8 @@ impl Patch {
             rest: [0.0; 3],
             area,
             clamped_edges,
+            frame: [e1, e2],
+            element: 0,
         };
         let mut at = [[0.0; 3]; MAX_NODES];
         patch.positions(|a| x[a], &mut at);

@@ -36,6 +36,7 @@ pub mod transfer;
 use crate::integrator::State;
 use crate::material::CRITICAL_STRETCH;
 use crate::measure::{DrapeTester, Given, Surface, measure};
+use crate::model::Model;
 use crate::scenario::Scenario;
 use crate::setup::{Analysis, Setup};
 use crate::simulation::{
@@ -228,7 +229,7 @@ pub fn run_with(
             k + 1,
         )
         .map_err(failed)?;
-        let state = carry(&next, &transfer, &finished.state);
+        let state = carry(&next, &transfer, (model, &finished.state));
         let mut counters = finished.counters;
         counters.wall_seconds += since.elapsed().as_secs_f64();
         start = Some(LevelStart {
@@ -302,9 +303,11 @@ fn build_level(
 /// level still fails in 200 and is relaxed (7 pseudo-steps).
 pub const LEVEL_ITERATIONS: usize = 200;
 
-/// The state `coarse` carried onto `fine`'s mesh by `transfer`, at rest
-/// (a static level), its time, work and friction dissipation kept; a new
-/// node held by a support at its reference position. The new nodes go on
+/// The state `coarse` (of `coarse_model`) carried onto `fine`'s mesh by
+/// `transfer`, at rest (a static level), its time, work and friction
+/// dissipation kept, a stick hysteresis's springs loaded as they were
+/// ([`crate::integrator::carried_plastic`]); a new node held by a support
+/// at its reference position. The new nodes go on
 /// the surface ([`transfer`]), but not where that compresses a fine
 /// element past [`CRITICAL_STRETCH`], where Saint-Venant–Kirchhoff loses
 /// stability and which no converged step may keep: across a tight fold
@@ -321,7 +324,7 @@ pub const LEVEL_ITERATIONS: usize = 200;
 /// 22 % more Newton iterations on its finer levels (31 % more time) and
 /// a faille's third level ten times its iterations: milder compressions
 /// are left for the level's settle to undo.
-fn carry(fine: &Setup, transfer: &Transfer, coarse: &State) -> State {
+fn carry(fine: &Setup, transfer: &Transfer, (coarse_model, coarse): (&Model, &State)) -> State {
     let model = &fine.model;
     let mut positions = transfer.carry(&coarse.positions);
     transfer.onto_chords(&coarse.positions, &mut positions, |y| {
@@ -337,6 +340,12 @@ fn carry(fine: &Setup, transfer: &Transfer, coarse: &State) -> State {
     state.time = coarse.time;
     state.external_work = coarse.external_work;
     state.friction_dissipation = coarse.friction_dissipation;
+    // A stick hysteresis's springs loaded as on the coarse level.
+    state.plastic = crate::integrator::carried_plastic(
+        (coarse_model, coarse),
+        (model, &state.positions),
+        &transfer.refinement.parent,
+    );
     state
 }
 

@@ -132,6 +132,67 @@ pub(crate) fn initial_plastic(model: &crate::model::Model, y: &[f64]) -> Vec<[f6
     stick(model).map_or_else(Vec::new, |(bending, _)| bending.curvatures(y))
 }
 
+/// The plastic curvatures a finer level starts from, its springs loaded
+/// as the coarse level's were: each coarse patch's spring curvature
+/// `kappa - kappa_p` (at the coarse state `coarse`) as a tensor of the
+/// reference plane, averaged over its element's patches by area, and each
+/// fine patch given its coarse element's tensor (`parent[e]`: the coarse
+/// element of fine element `e`) in its own frame: `kappa_p = kappa -
+/// delta` at the fine positions `y`. The fine patches of a coarse element
+/// lie in its plane, so the tensor carries over unchanged (a spring's
+/// moment, whatever the frames). None without a stick.
+pub(crate) fn carried_plastic(
+    (coarse_model, coarse): (&crate::model::Model, &crate::integrator::State),
+    (fine_model, y): (&crate::model::Model, &[f64]),
+    parent: &[usize],
+) -> Vec<[f64; 3]> {
+    let mut plastic = initial_plastic(fine_model, y);
+    let (Some((coarse_bending, _)), Some((fine_bending, _))) =
+        (stick(coarse_model), stick(fine_model))
+    else {
+        return plastic;
+    };
+    let outer = |a: [f64; 3], b: [f64; 3]| [0, 1, 2].map(|i| [0, 1, 2].map(|j| a[i] * b[j]));
+    let mut tensors = vec![([[0.0; 3]; 3], 0.0); coarse_model.mesh().element_count()];
+    let kappa = coarse_bending.curvatures(&coarse.positions);
+    for ((p, k), kp) in coarse_bending
+        .patches()
+        .iter()
+        .zip(kappa)
+        .zip(&coarse.plastic)
+    {
+        let d = [k[0] - kp[0], k[1] - kp[1], 0.5 * (k[2] - kp[2])];
+        let [e1, e2] = p.frame;
+        let (e11, e22, e12, e21) = (outer(e1, e1), outer(e2, e2), outer(e1, e2), outer(e2, e1));
+        let (t, area) = &mut tensors[p.element];
+        for i in 0..3 {
+            for j in 0..3 {
+                t[i][j] +=
+                    p.area * (d[0] * e11[i][j] + d[1] * e22[i][j] + d[2] * (e12[i][j] + e21[i][j]));
+            }
+        }
+        *area += p.area;
+    }
+    for (p, kp) in fine_bending.patches().iter().zip(&mut plastic) {
+        let (t, area) = &tensors[parent[p.element]];
+        if *area == 0.0 {
+            continue;
+        }
+        let [e1, e2] = p.frame;
+        let along = |a: [f64; 3], b: [f64; 3]| {
+            (0..3)
+                .map(|i| (0..3).map(|j| a[i] * t[i][j] * b[j]).sum::<f64>())
+                .sum::<f64>()
+                / area
+        };
+        let delta = [along(e1, e1), along(e2, e2), 2.0 * along(e1, e2)];
+        for j in 0..3 {
+            kp[j] -= delta[j];
+        }
+    }
+    plastic
+}
+
 /// How many plastic curvatures a run of `model` keeps: one per bending
 /// patch with a stick hysteresis, none otherwise.
 pub(crate) fn plastic_count(model: &crate::model::Model) -> usize {
@@ -220,6 +281,93 @@ mod tests {
                         let slips = !law.sticks() || to - from > 0.1;
                         assert_eq!(term.dissipation() > 0.0, slips, "{what}");
                         assert_eq!(term.stored() > 0.0, law.sticks(), "{what}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// A finer level's springs start loaded as the coarse level's were:
+    /// a flat sheet whose springs hold a uniform curvature tensor, refined
+    /// everywhere, gives each fine patch the same tensor — for a woven
+    /// fabric (every frame along the warp) the same components, for an
+    /// isotropic one (each frame along its triangle's first edge) the
+    /// same invariants.
+    #[test]
+    fn a_finer_level_keeps_the_springs_loads() {
+        let tensor = [[3.0, -1.5, 0.0], [-1.5, -2.0, 0.0], [0.0, 0.0, 0.0]];
+        let voigt = |[e1, e2]: [[f64; 3]; 2]| {
+            let along = |a: [f64; 3], b: [f64; 3]| {
+                (0..3)
+                    .map(|i| (0..3).map(|j| a[i] * tensor[i][j] * b[j]).sum::<f64>())
+                    .sum::<f64>()
+            };
+            [along(e1, e1), along(e2, e2), 2.0 * along(e1, e2)]
+        };
+        for rigidity in [
+            BendingRigidity::Isotropic(2e-5),
+            BendingRigidity::Woven {
+                warp: 3e-5,
+                weft: 1e-5,
+                direction: [1.0, 1.0, 0.0],
+            },
+        ] {
+            let build = |mesh| {
+                Model::builder(
+                    mesh,
+                    Box::new(SaintVenantKirchhoff::new(2e6, 0.3)),
+                    Section {
+                        thickness: 6e-4,
+                        prestress: 0.0,
+                    },
+                    320.0,
+                )
+                .bending(rigidity)
+                .bending_hysteresis(Some(Hysteresis {
+                    moment: [3e-4, 2e-4],
+                    hold: Hold::Stick { stiffness: 1e-4 },
+                }))
+                .build()
+                .expect("a valid model")
+            };
+            let mesh = rectangle(
+                [0.1, 0.1],
+                [4, 3],
+                Pattern::Alternate,
+                [0.0; 3],
+                ElementOrder::Linear,
+            );
+            let refinement = crate::mesh::refine::refine(&mesh, &vec![true; mesh.element_count()])
+                .expect("refined");
+            let coarse = build(mesh);
+            let fine = build(refinement.mesh.clone());
+            let mut state = crate::integrator::State::at_rest(&coarse, coarse.initial_positions());
+            let patches = coarse.bending().unwrap().patches();
+            for (p, kp) in patches.iter().zip(&mut state.plastic) {
+                let d = voigt(p.frame);
+                *kp = [0, 1, 2].map(|j| kp[j] - d[j]);
+            }
+            let y = fine.initial_positions();
+            let plastic = carried_plastic((&coarse, &state), (&fine, &y), &refinement.parent);
+            let kappa = fine.bending().unwrap().curvatures(&y);
+            let fine_patches = fine.bending().unwrap().patches();
+            assert!(fine_patches.len() > 3 * patches.len());
+            for ((p, k), kp) in fine_patches.iter().zip(kappa).zip(plastic) {
+                let d = [0, 1, 2].map(|j| k[j] - kp[j]);
+                let expected = voigt(p.frame);
+                let what = format!("{rigidity:?}: {d:?} against {expected:?}");
+                if matches!(rigidity, BendingRigidity::Woven { .. }) {
+                    assert!((0..3).all(|j| (d[j] - expected[j]).abs() < 1e-9), "{what}");
+                }
+                // The tensor again from the fine patch's components and
+                // frame (the sheet's plane holds both axes).
+                let [e1, e2] = p.frame;
+                for i in 0..3 {
+                    for j in 0..3 {
+                        let t = d[0] * e1[i] * e1[j]
+                            + d[1] * e2[i] * e2[j]
+                            + 0.5 * d[2] * (e1[i] * e2[j] + e2[i] * e1[j]);
+                        assert!((t - tensor[i][j]).abs() < 1e-9, "{what}: T_{i}{j} {t}");
                     }
                 }
             }
