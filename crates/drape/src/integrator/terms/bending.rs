@@ -87,29 +87,13 @@ where
 mod tests {
     use super::*;
     use crate::bending::BendingRigidity;
-    use crate::element::membrane::Section;
-    use crate::integrator::terms::{check_term, folded};
-    use crate::material::SaintVenantKirchhoff;
+    use crate::integrator::terms::{bending_builder as builder, check_term, folded};
     use crate::mesh::generate::{Pattern, rectangle};
     use crate::mesh::{ElementOrder, Mesh};
     use crate::model::Model;
 
     fn model(mesh: Mesh, rigidity: BendingRigidity) -> Model {
         builder(mesh, rigidity).build().expect("a valid model")
-    }
-
-    /// The parts of [`model`], to add to.
-    fn builder(mesh: Mesh, rigidity: BendingRigidity) -> crate::model::ModelBuilder {
-        Model::builder(
-            mesh,
-            Box::new(SaintVenantKirchhoff::new(2e6, 0.3)),
-            Section {
-                thickness: 6e-4,
-                prestress: 0.0,
-            },
-            320.0,
-        )
-        .bending(rigidity)
     }
 
     /// Energy, gradient and Hessian against central differences, flat,

@@ -204,12 +204,9 @@ mod tests {
     use super::*;
     use crate::bending::BendingRigidity;
     use crate::bending::hysteresis::Hold;
-    use crate::element::membrane::Section;
-    use crate::integrator::terms::{check_term, folded};
-    use crate::material::SaintVenantKirchhoff;
+    use crate::integrator::terms::{bending_builder, check_term, folded};
     use crate::mesh::ElementOrder;
     use crate::mesh::generate::{Pattern, rectangle};
-    use crate::model::Model;
 
     /// The term's gradient and Hessian against finite differences, from a
     /// flat and a rolled start, for changes within the smoothing and
@@ -227,20 +224,14 @@ mod tests {
             ElementOrder::Cubic,
         ] {
             let mesh = rectangle([0.1, 0.1], [4, 3], Pattern::Alternate, [0.0; 3], order);
-            let model = Model::builder(
+            let model = bending_builder(
                 mesh,
-                Box::new(SaintVenantKirchhoff::new(2e6, 0.3)),
-                Section {
-                    thickness: 6e-4,
-                    prestress: 0.0,
+                BendingRigidity::Woven {
+                    warp: 3e-5,
+                    weft: 1e-5,
+                    direction: [1.0, 1.0, 0.0],
                 },
-                320.0,
             )
-            .bending(BendingRigidity::Woven {
-                warp: 3e-5,
-                weft: 1e-5,
-                direction: [1.0, 1.0, 0.0],
-            })
             .build()
             .expect("a valid model");
             let bending = model.bending().expect("bending");
@@ -313,22 +304,13 @@ mod tests {
             },
         ] {
             let build = |mesh| {
-                Model::builder(
-                    mesh,
-                    Box::new(SaintVenantKirchhoff::new(2e6, 0.3)),
-                    Section {
-                        thickness: 6e-4,
-                        prestress: 0.0,
-                    },
-                    320.0,
-                )
-                .bending(rigidity)
-                .bending_hysteresis(Some(Hysteresis {
-                    moment: [3e-4, 2e-4],
-                    hold: Hold::Stick { stiffness: 1e-4 },
-                }))
-                .build()
-                .expect("a valid model")
+                bending_builder(mesh, rigidity)
+                    .bending_hysteresis(Some(Hysteresis {
+                        moment: [3e-4, 2e-4],
+                        hold: Hold::Stick { stiffness: 1e-4 },
+                    }))
+                    .build()
+                    .expect("a valid model")
             };
             let mesh = rectangle(
                 [0.1, 0.1],

@@ -31,8 +31,8 @@ pub use self_friction::SelfFrictionTerm;
 
 #[cfg(test)]
 pub(crate) use check::{
-    check_projection, check_term, contact_patch, deformed, dense_hessian, folded, patch_builder,
-    patch_model, relative_smallest_eigenvalue,
+    bending_builder, check_projection, check_term, contact_patch, deformed, dense_hessian, folded,
+    patch_builder, patch_model, relative_smallest_eigenvalue,
 };
 
 #[cfg(test)]
@@ -46,6 +46,24 @@ mod check {
     use crate::mesh::generate::{Pattern, rectangle};
     use crate::model::{Model, ModelBuilder};
     use crate::solver::SparsePattern;
+
+    /// A fabric on `mesh` that bends with `rigidity` (E 2 MPa, nu 0.3, 0.6
+    /// mm, 320 kg/m^3), to add to.
+    pub(crate) fn bending_builder(
+        mesh: crate::mesh::Mesh,
+        rigidity: crate::bending::BendingRigidity,
+    ) -> ModelBuilder {
+        Model::builder(
+            mesh,
+            Box::new(crate::material::SaintVenantKirchhoff::new(2e6, 0.3)),
+            Section {
+                thickness: 6e-4,
+                prestress: 0.0,
+            },
+            320.0,
+        )
+        .bending(rigidity)
+    }
 
     /// A 10 cm square (4 x 3 squares, alternating diagonals) of `order`,
     /// folded: `fold` scales a deformation that stretches, shears and
