@@ -456,8 +456,8 @@ fn check_counts_the_pieces_of_a_mesh() {
 /// A fabric given in KES units is checked in SI: its bending rigidity,
 /// its gravity bending length and its hysteresis as drape takes them
 /// (B = 0.118 gf·cm²/cm = 1.1572e-5 N m, W = 12.38 mg/cm²: (B / w)^(1/3)
-/// = 2.120 cm; 2HB = 0.124 gf·cm/cm, HB = 6.0801e-4 N m/m); a fabric
-/// without bending has no such line.
+/// = 2.120 cm; 2HB = 0.124 gf·cm/cm, HB = 6.0801e-4 N m/m), creeping or
+/// held by a stick; a fabric without bending has no such line.
 #[test]
 fn check_says_the_bending_in_si() {
     let tmp = TempDir::new("check-bending");
@@ -484,6 +484,16 @@ fn check_says_the_bending_in_si() {
     ] {
         assert!(line.contains(says), "{line:?} lacks {says:?}");
     }
+    // Held by a stick of 4 B: it slips past HB / k = 13.13 1/m.
+    let stuck = text(kes).replace(
+        "poisson_ratio = 0.3\n",
+        "poisson_ratio = 0.3\nbending_hysteresis_stiffness = 4.6288e-5\n",
+    );
+    std::fs::write(&scenario, stuck).unwrap();
+    let o = drape(tmp.path(), &["check".as_ref(), scenario.as_os_str()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe("check", &o));
+    let says = "held by a stick of 4.6288e-5 N m (slips past 13.1354 1/m)";
+    assert!(stdout(&o).contains(says), "{}", describe(says, &o));
     let plain = kes.replace(
         "B = { warp = 0.118, weft = 0.118 }\n2HB = { warp = 0.124, weft = 0.124 }\n",
         "",
