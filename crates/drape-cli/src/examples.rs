@@ -27,6 +27,10 @@ pub const ALL: &[(&str, &str)] = &[
         include_str!("../../../examples/bias-strip.toml"),
     ),
     (
+        "bending-friction",
+        include_str!("../../../examples/bending-friction.toml"),
+    ),
+    (
         "pedestal-fine",
         include_str!("../../../examples/pedestal-fine.toml"),
     ),

@@ -153,9 +153,23 @@ fn copy_dir(from: &Path, to: &Path) {
 /// spans several lines) by `steps` steps of size `dt` (default: the first
 /// segment's), and returns the new text with that `dt`. A static scenario
 /// (no `segments`) gets `steps` load increments instead (`[analysis]
-/// steps`), each `1 / steps` of the load. A plain textual edit: drape-cli
-/// does not depend on a TOML parser.
+/// steps`), each `1 / steps` of the load. A `[refine]` table is left out
+/// (each level would add a settle to the run; the levels' outputs are
+/// tested in `tests/levels.rs`). A plain textual edit: drape-cli does not
+/// depend on a TOML parser.
 fn shorten(text: &str, steps: usize, dt: Option<f64>) -> (String, f64) {
+    let mut in_refine = false;
+    let text = &text
+        .lines()
+        .filter(|line| {
+            let trimmed = line.trim_start();
+            if trimmed.starts_with('[') {
+                in_refine = trimmed.split('#').next().unwrap_or("").trim() == "[refine]";
+            }
+            !in_refine
+        })
+        .map(|line| format!("{line}\n"))
+        .collect::<String>();
     if !text.lines().any(|l| l.trim_start().starts_with("segments")) {
         let mut in_analysis = false;
         let mut out = String::new();
