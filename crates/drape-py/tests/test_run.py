@@ -392,3 +392,44 @@ def test_a_multilevel_settle_from_python_equals_the_command_line(cli, tmp_path):
     assert np.max(np.abs(python.positions() - command_line.positions())) <= TOLERANCE
     for key in ("status", "steps", "newton_iterations", "nodes", "elements"):
         assert python.summary[key] == command_line.summary[key], key
+
+
+def test_bending_friction_held_by_a_stick_from_a_dict(cli, tmp_path):
+    """The keys of bending hysteresis held by a stick (README, `[material]`)
+    from a dict: the run is the command line's, comes to rest (a stick does
+    not creep) and dissipates by the slip."""
+    doc = {
+        "mesh": {"shape": "rectangle", "size": [0.1, 0.1], "divisions": [6, 6]},
+        "material": {
+            "youngs_modulus": 2.0e6,
+            "poisson_ratio": 0.3,
+            "density": 320.0,
+            "thickness": 0.6e-3,
+            "bending_rigidity": 2.0e-5,
+            "bending_hysteresis": 2.0e-4,
+            "bending_hysteresis_stiffness": 2.0e-4,
+        },
+        "load": [{"kind": "gravity", "acceleration": [0.0, 0.0, -9.8]}],
+        "fix": [{"at": [-0.05, 0.05, 0.0]}, {"at": [0.05, 0.05, 0.0]}],
+        "time": {
+            "beta": 1.0,
+            "gamma": 1.5,
+            "segments": [{"steps": 2000, "dt": 1.0e-2}],
+            "adaptive": True,
+            "rest": {"speed": 1.0e-4, "after": 0.2},
+        },
+        "monitor": [{"name": "corner", "at": [-0.05, -0.05, 0.0]}],
+    }
+    scenario = write_scenario(doc, tmp_path / "stick.toml")
+    command_line = cli_run(cli, scenario, tmp_path / "cli")
+    python = drape.run(doc, out=tmp_path / "py")
+    assert_same_run(python, command_line)
+    assert python.summary["status"] == "completed"
+    assert python.summary["at_rest"] is True
+    assert python.history["friction_dissipation"][-1] > 0.0
+    # A stiffness with a creep rate is refused, naming both keys.
+    doc["material"]["bending_hysteresis_rate"] = 1.0
+    with pytest.raises(drape.ScenarioError) as e:
+        drape.run(doc, out=tmp_path / "both")
+    assert "bending_hysteresis_stiffness" in str(e.value)
+    assert "bending_hysteresis_rate" in str(e.value)
