@@ -191,6 +191,34 @@ fn tester() -> String {
     .unwrap()
 }
 
+/// The multilevel run of `text` into `out`, stopped (as by Ctrl-C) after
+/// step `step`, `check` seeing the directory, then resumed to its end.
+fn stopped_and_resumed(
+    text: &str,
+    out: &Path,
+    step: usize,
+    check: impl FnOnce(&Path),
+) -> simulation::Summary {
+    let stop = AtomicBool::new(false);
+    let control = RunControl {
+        stop: Some(&stop),
+        ..RunControl::default()
+    };
+    let e = run_levels(text, out, control, &mut |info| {
+        if info.step == step {
+            stop.store(true, Ordering::SeqCst);
+        }
+    })
+    .unwrap_err();
+    assert!(matches!(e, RunError::Interrupted { .. }), "{e}");
+    check(out);
+    let control = RunControl {
+        resume: true,
+        ..RunControl::default()
+    };
+    run_levels(text, out, control, &mut |_| {}).unwrap()
+}
+
 /// The levels in the summary with a drape coefficient each, the history's
 /// `elements` rising level by level and its time rising; interrupted on
 /// the first refined level's step and resumed, the run ends with the
@@ -230,23 +258,7 @@ fn a_multilevel_settle_resumes_across_a_refinement_bit_for_bit() {
 
     // Stop after the first refined level's increment (step 7).
     let cut = temp_dir("levels-cut");
-    let stop = AtomicBool::new(false);
-    let control = RunControl {
-        stop: Some(&stop),
-        ..RunControl::default()
-    };
-    let e = run_levels(&text, &cut, control, &mut |info| {
-        if info.step == 7 {
-            stop.store(true, Ordering::SeqCst);
-        }
-    })
-    .unwrap_err();
-    assert!(matches!(e, RunError::Interrupted { .. }), "{e}");
-    let control = RunControl {
-        resume: true,
-        ..RunControl::default()
-    };
-    let resumed = run_levels(&text, &cut, control, &mut |_| {}).unwrap();
+    let resumed = stopped_and_resumed(&text, &cut, 7, |_| {});
     assert_eq!(
         std::fs::read(whole.join("history.csv")).unwrap(),
         std::fs::read(cut.join("history.csv")).unwrap()
@@ -316,6 +328,42 @@ fn a_multilevel_settle_killed_on_a_finer_level_resumes_from_that_level() {
         );
     }
     assert_eq!(resumed.levels.len(), 3);
+}
+
+/// With a stick hysteresis (its plastic curvatures in the state, carried
+/// onto each finer level with the springs loaded) a multilevel settle
+/// stopped on its first refined level resumes from that level's
+/// checkpoint — its plastic curvatures those of the finer mesh's patches
+/// — to the uninterrupted run's history byte for byte, and slips on the
+/// way.
+#[test]
+fn a_multilevel_settle_with_a_stick_resumes_on_a_finer_level() {
+    let text = tester().replace(
+        "bending_rigidity = 2.0e-5\n",
+        "bending_rigidity = 2.0e-5\nbending_hysteresis = 1.0e-4\nbending_hysteresis_stiffness = 1.0e-4\n",
+    );
+    assert!(text.contains("bending_hysteresis_stiffness"));
+    let whole = temp_dir("levels-stick-whole");
+    let summary = run_levels(&text, &whole, RunControl::default(), &mut |_| {}).unwrap();
+    assert_eq!(summary.levels.len(), 3, "{:?}", summary.levels);
+    let cut = temp_dir("levels-stick-cut");
+    let resumed = stopped_and_resumed(&text, &cut, 7, |cut| {
+        let bytes = std::fs::read(cut.join("checkpoint.bin")).unwrap();
+        let levels = simulation::Checkpoint::recorded_levels(&bytes).unwrap();
+        assert_eq!(
+            levels.records.len(),
+            1,
+            "stopped on the first refined level"
+        );
+    });
+    assert_eq!(
+        std::fs::read(whole.join("history.csv")).unwrap(),
+        std::fs::read(cut.join("history.csv")).unwrap()
+    );
+    assert_eq!(resumed.levels.len(), 3);
+    let (header, rows) = read_history(&whole);
+    let dissipated = column(&header, &rows, "friction_dissipation");
+    assert!(*dissipated.last().unwrap() > 0.0, "{dissipated:?}");
 }
 
 /// `also`: with a Dörfler share that marks almost nothing, `"rim"` still

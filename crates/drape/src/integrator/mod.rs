@@ -10,7 +10,7 @@ pub mod terms;
 
 pub use newmark::Newmark;
 pub use statics::StaticStepper;
-pub(crate) use terms::{carried_plastic, plastic_count};
+pub(crate) use terms::{carry_springs, plastic_count};
 
 use crate::contact::lagrange::{ActiveNode, MAX_ACTIVE_SET_ROUNDS, REVISIONS_IN_NEWTON};
 use crate::contact::{ContactMethod, ContactModel, ContactState};

@@ -306,7 +306,7 @@ pub const LEVEL_ITERATIONS: usize = 200;
 /// The state `coarse` (of `coarse_model`) carried onto `fine`'s mesh by
 /// `transfer`, at rest (a static level), its time, work and friction
 /// dissipation kept, a stick hysteresis's springs loaded as they were
-/// ([`crate::integrator::carried_plastic`]); a new node held by a support
+/// ([`crate::integrator::carry_springs`]); a new node held by a support
 /// at its reference position. The new nodes go on
 /// the surface ([`transfer`]), but not where that compresses a fine
 /// element past [`CRITICAL_STRETCH`], where Saint-Venant–Kirchhoff loses
@@ -341,10 +341,11 @@ fn carry(fine: &Setup, transfer: &Transfer, (coarse_model, coarse): (&Model, &St
     state.external_work = coarse.external_work;
     state.friction_dissipation = coarse.friction_dissipation;
     // A stick hysteresis's springs loaded as on the coarse level.
-    state.plastic = crate::integrator::carried_plastic(
+    crate::integrator::carry_springs(
         (coarse_model, coarse),
-        (model, &state.positions),
+        model,
         &transfer.refinement.parent,
+        &mut state.plastic,
     );
     state
 }

@@ -1,12 +1,16 @@
 //! Bending hysteresis over a step: the frictional moment of bending as a
-//! dissipation potential of the step, from the curvatures at its start
-//! (the formulas, the law and the citations: [`crate::bending::hysteresis`]).
+//! potential of the step, from the curvatures at its start (creeping) or
+//! from the patches' plastic curvatures (a stick), and the stick's state
+//! between steps: its return map, its start and its carry onto a finer
+//! level (the formulas, the law and the citations:
+//! [`crate::bending::hysteresis`]).
 
 use super::super::potential::{Stencils, StepContext, StepTerm, TermValue};
 use super::bending::add_patches;
 use crate::bending::Bending;
 use crate::bending::hysteresis::Hysteresis;
 use crate::solver::SparsePattern;
+use std::borrow::Cow;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The bending hysteresis of a step.
@@ -15,8 +19,8 @@ pub struct HysteresisTerm<'a> {
     law: Hysteresis,
     pattern: &'a SparsePattern,
     /// Each patch's reference curvatures: at the step's start (creeping),
-    /// the plastic curvatures (a stick).
-    reference: Vec<[f64; 3]>,
+    /// the state's plastic curvatures (a stick, borrowed).
+    reference: Cow<'a, [[f64; 3]]>,
     /// The smoothing `e` (N/m) of the step.
     smooth: f64,
     forces: Vec<f64>,
@@ -36,13 +40,13 @@ impl<'a> HysteresisTerm<'a> {
         law: Hysteresis,
         pattern: &'a SparsePattern,
         (start, dt): (&[f64], f64),
-        plastic: &[[f64; 3]],
+        plastic: &'a [[f64; 3]],
     ) -> Self {
         let reference = if law.sticks() {
             assert_eq!(plastic.len(), bending.patches().len(), "plastic curvatures");
-            plastic.to_vec()
+            Cow::Borrowed(plastic)
         } else {
-            bending.curvatures(start)
+            Cow::Owned(bending.curvatures(start))
         };
         let energies = reference.iter().map(|_| Default::default()).collect();
         Self {
@@ -132,27 +136,28 @@ pub(crate) fn initial_plastic(model: &crate::model::Model, y: &[f64]) -> Vec<[f6
     stick(model).map_or_else(Vec::new, |(bending, _)| bending.curvatures(y))
 }
 
-/// The plastic curvatures a finer level starts from, its springs loaded
-/// as the coarse level's were: each coarse patch's spring curvature
-/// `kappa - kappa_p` (at the coarse state `coarse`) as a tensor of the
-/// reference plane, averaged over its element's patches by area, and each
-/// fine patch given its coarse element's tensor (`parent[e]`: the coarse
-/// element of fine element `e`) in its own frame: `kappa_p = kappa -
-/// delta` at the fine positions `y`. The fine patches of a coarse element
-/// lie in its plane, so the tensor carries over unchanged (a spring's
-/// moment, whatever the frames). None without a stick.
-pub(crate) fn carried_plastic(
+/// Loads a finer level's springs as the coarse level's were: `plastic`,
+/// the fine patches' plastic curvatures with the springs unloaded (their
+/// curvatures `kappa` at the level's start, [`initial_plastic`]), moved
+/// to `kappa - delta`.
+/// Each coarse patch's spring curvature `kappa - kappa_p` (at the coarse
+/// state `coarse`) is a tensor of the reference plane, averaged over its
+/// element's patches by area; each fine patch takes its coarse element's
+/// tensor (`parent[e]`: the coarse element of fine element `e`) in its
+/// own frame as `delta`. The fine patches of a coarse element lie in its
+/// plane, so the tensor carries over unchanged (a spring's moment,
+/// whatever the frames). Nothing without a stick.
+pub(crate) fn carry_springs(
     (coarse_model, coarse): (&crate::model::Model, &crate::integrator::State),
-    (fine_model, y): (&crate::model::Model, &[f64]),
+    fine_model: &crate::model::Model,
     parent: &[usize],
-) -> Vec<[f64; 3]> {
-    let mut plastic = initial_plastic(fine_model, y);
+    plastic: &mut [[f64; 3]],
+) {
     let (Some((coarse_bending, _)), Some((fine_bending, _))) =
         (stick(coarse_model), stick(fine_model))
     else {
-        return plastic;
+        return;
     };
-    let outer = |a: [f64; 3], b: [f64; 3]| [0, 1, 2].map(|i| [0, 1, 2].map(|j| a[i] * b[j]));
     let mut tensors = vec![([[0.0; 3]; 3], 0.0); coarse_model.mesh().element_count()];
     let kappa = coarse_bending.curvatures(&coarse.positions);
     for ((p, k), kp) in coarse_bending
@@ -161,19 +166,21 @@ pub(crate) fn carried_plastic(
         .zip(kappa)
         .zip(&coarse.plastic)
     {
+        // `2 kappa_12` in Voigt's third entry.
         let d = [k[0] - kp[0], k[1] - kp[1], 0.5 * (k[2] - kp[2])];
         let [e1, e2] = p.frame;
-        let (e11, e22, e12, e21) = (outer(e1, e1), outer(e2, e2), outer(e1, e2), outer(e2, e1));
         let (t, area) = &mut tensors[p.element];
         for i in 0..3 {
             for j in 0..3 {
-                t[i][j] +=
-                    p.area * (d[0] * e11[i][j] + d[1] * e22[i][j] + d[2] * (e12[i][j] + e21[i][j]));
+                t[i][j] += p.area
+                    * (d[0] * (e1[i] * e1[j])
+                        + d[1] * (e2[i] * e2[j])
+                        + d[2] * (e1[i] * e2[j] + e2[i] * e1[j]));
             }
         }
         *area += p.area;
     }
-    for (p, kp) in fine_bending.patches().iter().zip(&mut plastic) {
+    for (p, kp) in fine_bending.patches().iter().zip(plastic) {
         let (t, area) = &tensors[parent[p.element]];
         if *area == 0.0 {
             continue;
@@ -190,7 +197,6 @@ pub(crate) fn carried_plastic(
             kp[j] -= delta[j];
         }
     }
-    plastic
 }
 
 /// How many plastic curvatures a run of `model` keeps: one per bending
@@ -330,7 +336,8 @@ mod tests {
                 *kp = [0, 1, 2].map(|j| kp[j] - d[j]);
             }
             let y = fine.initial_positions();
-            let plastic = carried_plastic((&coarse, &state), (&fine, &y), &refinement.parent);
+            let mut plastic = initial_plastic(&fine, &y);
+            carry_springs((&coarse, &state), &fine, &refinement.parent, &mut plastic);
             let kappa = fine.bending().unwrap().curvatures(&y);
             let fine_patches = fine.bending().unwrap().patches();
             assert!(fine_patches.len() > 3 * patches.len());

@@ -21,7 +21,7 @@ pub use features::FeatureTerm;
 pub use friction::FrictionTerm;
 pub use gas::GasTerm;
 pub use hysteresis::HysteresisTerm;
-pub(crate) use hysteresis::{carried_plastic, initial_plastic, plastic_count, slip};
+pub(crate) use hysteresis::{carry_springs, initial_plastic, plastic_count, slip};
 pub use inertia::InertiaTerm;
 pub use loads::LoadTerm;
 pub use membrane::MembraneTerm;
